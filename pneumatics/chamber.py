@@ -1,0 +1,90 @@
+"""Pneumatic chambers: bellows and tanks (paper §2.1, eqs 1-4 and 8).
+
+The functions are pure and vectorised: every argument may be a scalar or an array, with
+chambers along the first axis and, optionally, independent cases along a trailing axis.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Bellow:
+    """An airspring: a chamber whose volume and effective area depend on the crushing z.
+
+    z is positive in compression (design.md): V = V0 - (dV/dz) z, A_e = A0 + (dA/dz) z.
+    Defaults are the paper's Table 1 (its "volume gradient 0.13 m^2" equals the effective area).
+    ``p0_Pa`` None means the user of the circuit sets it (e.g. from the static load).
+    """
+
+    V0_m3: float = 0.012
+    dV_dz_m2: float = 0.13
+    A0_m2: float = 0.13
+    dA_dz_m: float = 0.0
+    p0_Pa: Optional[float] = None
+    T0_K: Optional[float] = None
+
+    def volume_m3(self, z_m):
+        return self.V0_m3 - self.dV_dz_m2 * z_m
+
+    def area_m2(self, z_m):
+        return self.A0_m2 + self.dA_dz_m * z_m
+
+
+@dataclass(frozen=True)
+class Tank:
+    """A rigid chamber (auxiliary tank, or a finite main reservoir). Table 1: 27 dm^3."""
+
+    V_m3: float = 0.027
+    p0_Pa: Optional[float] = None
+    T0_K: Optional[float] = None
+
+
+def bellow_force_N(A_e_m2, p_Pa, p_atm_Pa):
+    """Vertical bellow force, eq. (4): F = A_e (p_b - p_a). Positive pushes carbody and bogie apart."""
+    return A_e_m2 * (p_Pa - p_atm_Pa)
+
+
+def heat_flow_into_W(k_W_per_K, T_K, T_atm_K):
+    """Heat flow INTO a chamber from the atmosphere, eq. (8) with the physical sign.
+
+    The paper writes dQ/dt = k (T - T_atm) and adds it in eq. (2); taken literally a hot
+    chamber would heat up further (design.md, erratum 1). Heat flows from hot to cold:
+    dQ/dt = k (T_atm - T).
+    """
+    return k_W_per_K * (T_atm_K - T_K)
+
+
+def temperature_rate_K_per_s(m_kg, T_K, p_Pa, mdot_in_kg_per_s, Hdot_in_W, Qdot_in_W, Vdot_m3_per_s,
+                             cv_J_per_kgK):
+    """First law for an open chamber, eq. (2).
+
+    dT/dt = (gamma-1)/(R M) (sum q_i h_i - R T/(gamma-1) sum q_i + dQ/dt - p dV/dt)
+          = (Hdot_in - cv T Mdot + Qdot - p Vdot) / (M cv),
+    with h_i the total enthalpy c_p T_upstream carried by each entering flow q_i.
+    """
+    return (Hdot_in_W - cv_J_per_kgK * T_K * mdot_in_kg_per_s + Qdot_in_W - p_Pa * Vdot_m3_per_s) / (
+        m_kg * cv_J_per_kgK)
+
+
+def isothermal_heat_flow_W(T_K, p_Pa, mdot_in_kg_per_s, Hdot_in_W, Vdot_m3_per_s, cv_J_per_kgK):
+    """Heat flow that holds T constant (the k -> infinity limit): eq. (2) solved for dQ/dt with dT/dt = 0."""
+    return cv_J_per_kgK * T_K * mdot_in_kg_per_s - Hdot_in_W + p_Pa * Vdot_m3_per_s
+
+
+def bellow_stiffness_N_per_m(bellow: Bellow, z_m, p_Pa, p_atm_Pa, polytropic_index):
+    """Instantaneous stiffness dF/dz of a closed bellow, polytropic exponent n (gamma adiabatic, 1 isothermal).
+
+    dF/dz = dA/dz (p - p_atm) + A_e n p (dV/dz) / V; for a cylindrical bellow (dA/dz = 0)
+    this is the paper's gamma A^2 p0 / V (adiabatic) or A^2 p0 / V (isothermal), §1 and Table 2.
+    """
+    V = bellow.volume_m3(z_m)
+    return bellow.dA_dz_m * (p_Pa - p_atm_Pa) + bellow.area_m2(z_m) * polytropic_index * p_Pa * bellow.dV_dz_m2 / V
+
+
+def quasi_static_stiffness_N_per_m(A_m2, p0_Pa, V_m3, polytropic_index):
+    """Table 2: n A^2 p0 / V (n = gamma adiabatic, 1 isothermal) for a cylindrical bellow of total volume V."""
+    return polytropic_index * A_m2 ** 2 * p0_Pa / V_m3

@@ -1,0 +1,476 @@
+"""Assemble components into one pneumatic circuit: a state vector and its time derivative.
+
+A circuit is described declaratively as a mapping ``name -> component`` (the dataclasses of
+:mod:`pneumatics.chamber`, :mod:`pneumatics.boundary`, :mod:`pneumatics.pipe`,
+:mod:`pneumatics.orifice`, :mod:`pneumatics.valves`). Chambers (bellows, tanks, finite
+reservoirs) are the nodes that hold air; the atmosphere and fixed-pressure supplies are boundary
+nodes; pipes, orifices and valves are links that carry a signed mass flow between two nodes.
+
+State vector (one column per independent case when batched; see :class:`StateLayout`):
+
+=================  =========================================================
+``m``              air mass in each chamber [kg] (eq. 1)
+``T``              temperature of each chamber [K] (eq. 2)
+``q``              mass flow in each dynamic pipe, a -> b [kg/s] (eq. 5)
+``mass_through``   cumulative mass through each link, a -> b [kg]
+``heat_in``        cumulative heat into all chambers from the atmosphere [J] (eq. 8)
+``work_in``        cumulative work done on the gas by the bellows, -int p dV [J]
+``enthalpy_in``    cumulative enthalpy brought in from boundary nodes [J]
+=================  =========================================================
+
+Inputs: the crushing z [m] (positive in compression) and its rate of every bellow, in the order
+of :attr:`Circuit.bellow_names`. Every array may carry a trailing "case" axis so that many
+cases (e.g. several k values or frequencies) are integrated as one vectorised system.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping, Optional, Sequence
+
+import numpy as np
+
+from .boundary import Atmosphere, Supply
+from .chamber import Bellow, Tank, bellow_force_N, bellow_stiffness_N_per_m
+from .gas import AIR, Gas
+from .orifice import Orifice, orifice_flow_kg_per_s
+from .pipe import Pipe, pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
+from .valves import (DifferentialPressureValve, LevellingValve, SafetyValve,
+                     differential_valve_flow_kg_per_s, lever_conductance)
+
+#: YAML ``type`` name -> component class.
+COMPONENT_TYPES = {
+    "bellow": Bellow,
+    "tank": Tank,
+    "supply": Supply,
+    "pipe": Pipe,
+    "orifice": Orifice,
+    "levelling_valve": LevellingValve,
+    "safety_valve": SafetyValve,
+    "differential_valve": DifferentialPressureValve,
+}
+
+ATMOSPHERE = "atmosphere"
+PIPE_MODELS = ("dynamic", "quasi_steady")
+
+
+class CircuitError(ValueError):
+    """A circuit description that cannot be assembled; ``path`` locates the offending field."""
+
+    def __init__(self, path: Sequence[str], message: str):
+        self.path = tuple(str(p) for p in path)
+        self.reason = message
+        super().__init__(f"{'.'.join(self.path)}: {message}")
+
+
+class CircuitDiverged(RuntimeError):
+    """Integration produced a non-physical state; carries where and when, for a diagnosis."""
+
+    def __init__(self, t_s: float, component: str, state: Mapping[str, float], reason: str):
+        self.t_s, self.component, self.state, self.reason = t_s, component, dict(state), reason
+        detail = ", ".join(f"{k}={v:.6g}" for k, v in self.state.items())
+        super().__init__(f"pneumatic circuit diverged at t = {t_s:.6g} s in '{component}': {reason} ({detail})")
+
+
+@dataclass(frozen=True)
+class StateLayout:
+    """Where each group of states sits in the state vector."""
+
+    n_chambers: int
+    n_pipes: int
+    n_links: int
+
+    @property
+    def m(self) -> slice:
+        return slice(0, self.n_chambers)
+
+    @property
+    def T(self) -> slice:
+        return slice(self.n_chambers, 2 * self.n_chambers)
+
+    @property
+    def q(self) -> slice:
+        start = 2 * self.n_chambers
+        return slice(start, start + self.n_pipes)
+
+    @property
+    def mass_through(self) -> slice:
+        start = 2 * self.n_chambers + self.n_pipes
+        return slice(start, start + self.n_links)
+
+    @property
+    def heat_in(self) -> int:
+        return 2 * self.n_chambers + self.n_pipes + self.n_links
+
+    @property
+    def work_in(self) -> int:
+        return self.heat_in + 1
+
+    @property
+    def enthalpy_in(self) -> int:
+        return self.heat_in + 2
+
+    @property
+    def size(self) -> int:
+        return self.heat_in + 3
+
+    @property
+    def n_dynamic(self) -> int:
+        """States that describe the physical condition (m, T, q); the rest are accumulators."""
+        return 2 * self.n_chambers + self.n_pipes
+
+
+@dataclass(frozen=True)
+class CircuitOutputs:
+    """Everything observable at one instant (arrays: chambers or links first, cases last)."""
+
+    p_Pa: np.ndarray
+    T_K: np.ndarray
+    m_kg: np.ndarray
+    V_m3: np.ndarray
+    link_flow_kg_per_s: np.ndarray
+    bellow_force_N: np.ndarray
+
+
+def _column(values) -> np.ndarray:
+    return np.asarray(values, dtype=float).reshape(-1, 1)
+
+
+class Circuit:
+    """A compiled pneumatic circuit.
+
+    ``k_W_per_K`` is the heat-transfer coefficient of every chamber (eq. 8): 0 is adiabatic,
+    ``inf`` the exact isothermal limit (T held at the atmosphere's temperature, the heat flow
+    being whatever that takes). An array of k values, one per case, batches cases.
+    """
+
+    def __init__(self, components: Mapping[str, object], *, gas: Gas = AIR,
+                 atmosphere: Atmosphere = Atmosphere(), k_W_per_K=0.0):
+        self.components = dict(components)
+        self.gas = gas
+        self.atmosphere = atmosphere
+        self.k_W_per_K = np.asarray(k_W_per_K, dtype=float)
+        if np.any(self.k_W_per_K < 0) or np.any(np.isnan(self.k_W_per_K)):
+            raise CircuitError(["k_W_per_K"], f"must be >= 0 (or inf for isothermal), got {k_W_per_K}")
+        self._isothermal = np.isinf(self.k_W_per_K)
+        self._any_isothermal = bool(np.any(self._isothermal))
+        self._k_finite = np.where(self._isothermal, 0.0, self.k_W_per_K)
+        self._boundary_columns = {}
+        self._classify()
+        self._compile_links()
+
+    # ----------------------------------------------------------------------------- assembly
+    def _classify(self) -> None:
+        if ATMOSPHERE in self.components:
+            raise CircuitError([ATMOSPHERE], "the name 'atmosphere' is reserved for the surroundings")
+        self.chamber_names = []
+        boundary = [(ATMOSPHERE, self.atmosphere.p_Pa, self.atmosphere.T_K)]
+        for name, comp in self.components.items():
+            if not isinstance(comp, tuple(COMPONENT_TYPES.values())):
+                raise CircuitError([name], f"unknown component {type(comp).__name__}; "
+                                           f"expected one of {sorted(COMPONENT_TYPES)}")
+            if isinstance(comp, (Bellow, Tank)) or (isinstance(comp, Supply) and not comp.is_fixed):
+                self.chamber_names.append(name)
+            elif isinstance(comp, Supply):
+                boundary.append((name, comp.p_Pa, comp.T_K or self.atmosphere.T_K))
+        self.bellow_names = [n for n in self.chamber_names if isinstance(self.components[n], Bellow)]
+        self.boundary_names = [b[0] for b in boundary]
+        self.node_names = self.chamber_names + self.boundary_names
+        self._node_index = {n: i for i, n in enumerate(self.node_names)}
+        self._p_boundary = _column([b[1] for b in boundary])
+        self._T_boundary = _column([b[2] for b in boundary])
+
+        nc, nb = len(self.chamber_names), len(self.bellow_names)
+        V0 = []
+        for n in self.chamber_names:
+            c = self.components[n]
+            V0.append(c.V0_m3 if isinstance(c, Bellow) else c.V_m3)
+            if V0[-1] <= 0:
+                raise CircuitError([n, "V0_m3" if isinstance(c, Bellow) else "V_m3"],
+                                   f"volume must be > 0, got {V0[-1]}")
+        self._V0 = _column(V0)
+        # chamber <- bellow selection, scaled by dV/dz: V = V0 - Ez @ z
+        self._Ez = np.zeros((nc, nb))
+        for j, n in enumerate(self.bellow_names):
+            self._Ez[self.chamber_names.index(n), j] = self.components[n].dV_dz_m2
+        self._A0 = _column([self.components[n].A0_m2 for n in self.bellow_names])
+        self._dAdz = _column([self.components[n].dA_dz_m for n in self.bellow_names])
+        self._bellow_chamber = np.array([self.chamber_names.index(n) for n in self.bellow_names], dtype=int)
+
+    def _node(self, link: str, field: str, name: str, chambers_only: bool = False) -> int:
+        if name not in self._node_index:
+            known = ", ".join(self.node_names)
+            raise CircuitError([link, field], f"refers to '{name}', which is not in the circuit (known nodes: {known})")
+        if chambers_only and name not in self.chamber_names:
+            raise CircuitError([link, field], f"'{name}' must be a chamber (bellow, tank or finite supply)")
+        return self._node_index[name]
+
+    def _bellow_index(self, link: str, field: str, name: str) -> int:
+        if name not in self.bellow_names:
+            raise CircuitError([link, field], f"'{name}' is not a bellow of the circuit (bellows: {self.bellow_names})")
+        return self.bellow_names.index(name)
+
+    def _compile_links(self) -> None:
+        comps = self.components
+        pipes = [n for n, c in comps.items() if isinstance(c, Pipe) and c.model == "dynamic"]
+        qs_pipes = [n for n, c in comps.items() if isinstance(c, Pipe) and c.model == "quasi_steady"]
+        for n, c in comps.items():
+            if isinstance(c, Pipe) and c.model not in PIPE_MODELS:
+                raise CircuitError([n, "model"], f"expected one of {PIPE_MODELS}, got '{c.model}'")
+        orifices = [n for n, c in comps.items() if isinstance(c, Orifice)]
+        valves = [n for n, c in comps.items() if isinstance(c, LevellingValve)]
+        dpvs = [n for n, c in comps.items() if isinstance(c, DifferentialPressureValve)]
+
+        ends, self.link_names = [], []
+
+        def add(link_name, comp_name, a_field, a, b_field, b):
+            ia, ib = self._node(comp_name, a_field, a), self._node(comp_name, b_field, b)
+            if ia == ib:
+                raise CircuitError([comp_name, b_field], f"both ends are '{a}'")
+            if ia >= len(self.chamber_names) and ib >= len(self.chamber_names):
+                raise CircuitError([comp_name], f"connects two boundary nodes ('{a}', '{b}')")
+            ends.append((ia, ib))
+            self.link_names.append(link_name)
+
+        for n in pipes + qs_pipes + orifices + dpvs:
+            add(n, n, "a", comps[n].a, "b", comps[n].b)
+        for n in valves:
+            v = comps[n]
+            self._node(n, "bellow", v.bellow, chambers_only=True)
+            self._bellow_index(n, "bellow", v.bellow)
+            add(f"{n}.supply", n, "supply", v.supply, "bellow", v.bellow)
+        for n in valves:
+            v = comps[n]
+            add(f"{n}.exhaust", n, "bellow", v.bellow, "exhaust", v.exhaust)
+        for n, c in comps.items():
+            if isinstance(c, (Pipe, Orifice, DifferentialPressureValve, LevellingValve)):
+                self._check_link_values(n, c)
+
+        self._a = np.array([e[0] for e in ends], dtype=int)
+        self._b = np.array([e[1] for e in ends], dtype=int)
+        nc, nl = len(self.chamber_names), len(ends)
+        self.layout = StateLayout(nc, len(pipes), nl)
+        self.pipe_names = pipes
+        self._incidence = np.zeros((nc, nl))
+        self._boundary_sign = np.zeros(nl)
+        for j, (ia, ib) in enumerate(ends):
+            if ia < nc:
+                self._incidence[ia, j] -= 1.0
+            else:
+                self._boundary_sign[j] = 1.0
+            if ib < nc:
+                self._incidence[ib, j] += 1.0
+            else:
+                self._boundary_sign[j] = -1.0
+
+        n_pipe, n_qs, n_or, n_dpv, n_v = len(pipes), len(qs_pipes), len(orifices), len(dpvs), len(valves)
+        self._sl_pipe = slice(0, n_pipe)
+        self._sl_qs = slice(n_pipe, n_pipe + n_qs)
+        self._sl_or = slice(n_pipe + n_qs, n_pipe + n_qs + n_or)
+        self._sl_dpv = slice(self._sl_or.stop, self._sl_or.stop + n_dpv)
+        self._sl_valve = slice(self._sl_dpv.stop, nl)  # supply sides then exhaust sides
+        # links whose flow is an ISO 6358 orifice law: fixed orifices, then valve sides
+        self._orifice_links = np.r_[np.arange(self._sl_or.start, self._sl_or.stop),
+                                    np.arange(self._sl_valve.start, self._sl_valve.stop)].astype(int)
+        self._pipe_L = _column([comps[n].length_m for n in pipes])
+        self._pipe_A = _column([comps[n].area_m2 for n in pipes])
+        self._pipe_K = _column([comps[n].loss_coefficient for n in pipes])
+        self._qs_A = _column([comps[n].area_m2 for n in qs_pipes])
+        self._qs_K = _column([comps[n].loss_coefficient for n in qs_pipes])
+        self._or_C = _column([comps[n].C_m3_per_sPa for n in orifices])
+        self._dpv = [comps[n] for n in dpvs]
+        self._valves = [comps[n] for n in valves]
+        self.valve_names = valves
+        self._b_crit = _column([comps[n].b_critical for n in orifices] +
+                               [comps[n].b_critical for n in valves] * 2)
+        self._lever = np.zeros((n_v, len(self.bellow_names)))
+        for i, n in enumerate(valves):
+            sensed = comps[n].sensed_bellows
+            for s in sensed:
+                self._lever[i, self._bellow_index(n, "sensed", s)] += comps[n].lever_gain / len(sensed)
+
+    @staticmethod
+    def _check_link_values(name: str, comp) -> None:
+        positive = {"length_m", "diameter_m", "loss_coefficient"} if isinstance(comp, Pipe) else set()
+        if isinstance(comp, Orifice):
+            positive = {"C_m3_per_sPa"}
+        for field in positive:
+            if not getattr(comp, field) > 0:
+                raise CircuitError([name, field], f"must be > 0, got {getattr(comp, field)}")
+        if isinstance(comp, (Orifice, LevellingValve)) and not 0.0 <= comp.b_critical < 1.0:
+            raise CircuitError([name, "b_critical"], f"must be in [0, 1), got {comp.b_critical}")
+        tables = []
+        if isinstance(comp, LevellingValve):
+            tables = [("supply_lever_m", "supply_C_m3_per_sPa"), ("exhaust_lever_m", "exhaust_C_m3_per_sPa")]
+        elif isinstance(comp, DifferentialPressureValve):
+            tables = [("dp_Pa", "q_kg_per_s")]
+        for xf, yf in tables:
+            x, y = np.asarray(getattr(comp, xf), float), np.asarray(getattr(comp, yf), float)
+            if x.size < 2 or x.size != y.size:
+                raise CircuitError([name, yf], f"needs as many values as {xf} (at least 2); got {y.size} and {x.size}")
+            if np.any(np.diff(x) <= 0) or x[0] < 0:
+                raise CircuitError([name, xf], "must start at >= 0 and increase strictly")
+            if np.any(y < 0):
+                raise CircuitError([name, yf], "must be >= 0")
+
+    # ----------------------------------------------------------------------------- state
+    def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
+        """State at rest with every bellow at z = 0: each chamber at its initial pressure, no flow.
+
+        ``p0_Pa`` overrides chamber initial pressures by name (e.g. bellow pressures that carry
+        the static load). Temperatures start at the component's ``T0_K`` or the atmosphere's.
+        ``n_cases`` returns a (size, n_cases) array (default: one column per k value, or 1-D).
+        """
+        p0_Pa = dict(p0_Pa or {})
+        unknown = set(p0_Pa) - set(self.chamber_names)
+        if unknown:
+            raise CircuitError([sorted(unknown)[0]], f"initial pressure given for a name that is not a chamber "
+                                                     f"(chambers: {self.chamber_names})")
+        lay = self.layout
+        x = np.zeros(lay.size)
+        for i, n in enumerate(self.chamber_names):
+            c = self.components[n]
+            p = p0_Pa.get(n, c.p_Pa if isinstance(c, Supply) else c.p0_Pa)
+            if p is None:
+                raise CircuitError([n, "p0_Pa"], "initial pressure is not set")
+            if not p > 0:
+                raise CircuitError([n, "p0_Pa"], f"must be > 0 (absolute pressure), got {p}")
+            T = getattr(c, "T0_K", None) or getattr(c, "T_K", None) or self.atmosphere.T_K
+            if np.any(self._isothermal) and T != self.atmosphere.T_K:
+                raise CircuitError([n, "T0_K"], "an isothermal (k = inf) chamber must start at the atmosphere's temperature")
+            x[lay.T][i] = T
+            x[lay.m][i] = self.gas.mass_kg(p, T, self._V0[i, 0])
+        if n_cases is None and self.k_W_per_K.ndim:
+            n_cases = self.k_W_per_K.size
+        return x if n_cases is None else np.repeat(x[:, None], n_cases, axis=1)
+
+    # ----------------------------------------------------------------------------- physics
+    def _boundary(self, n_cases: int):
+        """Boundary-node pressures, temperatures and orifice conductances repeated over ``n_cases`` (cached)."""
+        cols = self._boundary_columns.get(n_cases)
+        if cols is None:
+            cols = self._boundary_columns[n_cases] = tuple(
+                np.repeat(v, n_cases, axis=1) for v in (self._p_boundary, self._T_boundary, self._or_C))
+        return cols
+
+    def _evaluate(self, x2: np.ndarray, z2: np.ndarray):
+        """Pressures, volumes and link flows for a 2-D state (states x cases) and crushing (bellows x cases)."""
+        lay, gas = self.layout, self.gas
+        m, T = x2[lay.m], x2[lay.T]
+        V = self._V0 - self._Ez @ z2
+        p = m * gas.R_J_per_kgK * T / V
+        n_cases = x2.shape[1]
+        p_bnd, T_bnd, C_or = self._boundary(n_cases)
+        p_n, T_n = np.concatenate([p, p_bnd]), np.concatenate([T, T_bnd])
+        rho_n = p_n / (gas.R_J_per_kgK * T_n)
+        a, b = self._a, self._b
+        w = np.empty((len(a), n_cases))
+        w[self._sl_pipe] = x2[lay.q]
+        qs = self._sl_qs
+        if qs.stop > qs.start:
+            rho = 0.5 * (rho_n[a[qs]] + rho_n[b[qs]])
+            w[qs] = pipe_flow_quasi_steady_kg_per_s(p_n[a[qs]], p_n[b[qs]], rho, self._qs_A, self._qs_K)
+        for j, v in zip(range(self._sl_dpv.start, self._sl_dpv.stop), self._dpv):
+            w[j] = differential_valve_flow_kg_per_s(p_n[a[j]], p_n[b[j]], v.dp_Pa, v.q_kg_per_s)
+        C = [C_or]
+        if self._valves:
+            lever = self._lever @ z2
+            C.append(np.array([lever_conductance(lever[i], v.supply_lever_m, v.supply_C_m3_per_sPa)
+                               for i, v in enumerate(self._valves)]))
+            C.append(np.array([lever_conductance(-lever[i], v.exhaust_lever_m, v.exhaust_C_m3_per_sPa)
+                               for i, v in enumerate(self._valves)]))
+        C = np.concatenate(C)
+        if C.size:
+            ia, ib = a[self._orifice_links], b[self._orifice_links]
+            w[self._orifice_links] = orifice_flow_kg_per_s(C, self._b_crit, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
+        return m, T, V, p, p_n, T_n, rho_n, w
+
+    def derivatives(self, x, z_m, zdot_m_per_s) -> np.ndarray:
+        """d(state)/dt for state ``x`` (size,) or (size, cases) and bellow crushing and rate."""
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = np.asarray(z_m, float).reshape(len(self.bellow_names), -1)
+        zdot2 = np.asarray(zdot_m_per_s, float).reshape(len(self.bellow_names), -1)
+        gas, lay = self.gas, self.layout
+        cv, cp = gas.cv_J_per_kgK, gas.cp_J_per_kgK
+        m, T, V, p, p_n, T_n, rho_n, w = self._evaluate(x2, z2)
+        a, b = self._a, self._b
+        Vdot = -self._Ez @ zdot2
+        h_up = cp * np.where(w >= 0.0, T_n[a], T_n[b])
+        Hw = w * h_up
+        mdot = self._incidence @ w                                      # eq. (1)
+        Hdot = self._incidence @ Hw
+        pVdot = p * Vdot
+        Qdot = self._k_finite * (self.atmosphere.T_K - T)              # eq. (8), physical sign
+        if self._any_isothermal:
+            Q_iso = cv * T * mdot - Hdot + pVdot                        # eq. (2) with dT/dt = 0
+            Qdot = np.where(self._isothermal, Q_iso, Qdot)
+        dT = (Hdot - cv * T * mdot + Qdot - pVdot) / (m * cv)           # eq. (2)
+        if self._any_isothermal:
+            dT = np.where(self._isothermal, 0.0, dT)
+        pipes = self._sl_pipe
+        rho_pipe = 0.5 * (rho_n[a[pipes]] + rho_n[b[pipes]])
+        dq = pipe_flow_rate_kg_per_s2(x2[lay.q], p_n[a[pipes]], p_n[b[pipes]], rho_pipe,
+                                      self._pipe_L, self._pipe_A, self._pipe_K)  # eq. (5)
+        dx = np.concatenate([mdot, dT, dq, w, Qdot.sum(axis=0, keepdims=True),
+                             -pVdot.sum(axis=0, keepdims=True), (self._boundary_sign @ Hw)[None]])
+        return dx.reshape(x.shape)
+
+    def outputs(self, x, z_m) -> CircuitOutputs:
+        """Pressures, temperatures, masses, volumes, link flows and bellow forces (eq. 4)."""
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = np.asarray(z_m, float).reshape(len(self.bellow_names), -1)
+        m, T, V, p, _, _, _, w = self._evaluate(x2, z2)
+        F = self.bellow_forces_N(x2, z2)
+        squeeze = (lambda v: v[:, 0]) if x.ndim == 1 else (lambda v: v)
+        return CircuitOutputs(*(squeeze(v) for v in (p, T, m, V, w, F)))
+
+    def bellow_pressures_Pa(self, x2, z2) -> np.ndarray:
+        idx = self._bellow_chamber
+        lay = self.layout
+        V = self._V0[idx] - self._Ez[idx] @ z2
+        return x2[lay.m][idx] * self.gas.R_J_per_kgK * x2[lay.T][idx] / V
+
+    def bellow_forces_N(self, x, z_m) -> np.ndarray:
+        """Eq. (4) for every bellow; shapes follow ``z_m`` (bellows[, cases])."""
+        z = np.asarray(z_m, float)
+        x2, z2 = x.reshape(self.layout.size, -1), z.reshape(len(self.bellow_names), -1)
+        F = bellow_force_N(self._A0 + self._dAdz * z2, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
+        return F.reshape(z.shape)
+
+    def bellow_stiffness_N_per_m(self, x, z_m) -> np.ndarray:
+        """Instantaneous dF/dz of each bellow (air in the pipe cannot move instantly): adiabatic,
+        or isothermal when k = inf. The co-simulation master uses it to linearise the force over a step."""
+        z = np.asarray(z_m, float)
+        x2, z2 = x.reshape(self.layout.size, -1), z.reshape(len(self.bellow_names), -1)
+        p = self.bellow_pressures_Pa(x2, z2)
+        n = np.where(self._isothermal, 1.0, self.gas.gamma)
+        K = np.array([bellow_stiffness_N_per_m(self.components[name], z2[j], p[j], self.atmosphere.p_Pa, n)
+                      for j, name in enumerate(self.bellow_names)])
+        return K.reshape(z.shape)
+
+    def total_mass_kg(self, x) -> np.ndarray:
+        return x[self.layout.m].sum(axis=0)
+
+    def internal_energy_J(self, x) -> np.ndarray:
+        lay = self.layout
+        return (x[lay.m] * x[lay.T]).sum(axis=0) * self.gas.cv_J_per_kgK
+
+    def mass_from(self, x, node: str) -> np.ndarray:
+        """Cumulative mass that left boundary node ``node`` into the circuit (negative: received) [kg]."""
+        i = self._node_index[node]
+        sign = (self._a == i).astype(float) - (self._b == i).astype(float)
+        return sign @ x[self.layout.mass_through]
+
+    def check_state(self, x, t_s: float) -> None:
+        """Raise :class:`CircuitDiverged` naming the component if a state is non-finite or non-physical."""
+        lay = self.layout
+        x2 = x.reshape(lay.size, -1)
+        bad_m = ~np.isfinite(x2[lay.m]) | (x2[lay.m] <= 0)
+        bad_T = ~np.isfinite(x2[lay.T]) | (x2[lay.T] <= 0)
+        bad_q = ~np.isfinite(x2[lay.q])
+        for bad, names, what in ((bad_m, self.chamber_names, "mass"), (bad_T, self.chamber_names, "temperature"),
+                                 (bad_q, self.pipe_names, "pipe flow")):
+            if np.any(bad):
+                i, case = map(int, np.argwhere(bad)[0])
+                state = {"case": case, "m_kg": x2[lay.m][i, case], "T_K": x2[lay.T][i, case]} if what != "pipe flow" \
+                    else {"case": case, "q_kg_per_s": x2[lay.q][i, case]}
+                raise CircuitDiverged(t_s, names[i], state, f"{what} is not finite and positive")

@@ -1,0 +1,51 @@
+"""ISO 6358 orifice flow (paper §2.3, eqs 6-7) in either direction."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .gas import AIR, T_REF_K, Gas
+
+#: Below this relative pressure difference 1 - p2/p1 the subsonic law (slope -> infinity at
+#: p2 = p1) is replaced by its chord to zero: linear ("laminar") in the pressure difference,
+#: continuous at the threshold. It keeps the flow Lipschitz for the integrator; like ISO 6358-3's
+#: laminar region, it changes the flow only within 0.1 % of pressure equality.
+LAMINAR_RATIO = 1e-3
+
+
+@dataclass(frozen=True)
+class Orifice:
+    """A fixed restriction between two nodes: sonic conductance C [m^3/(s Pa)] and critical ratio b."""
+
+    a: str
+    b: str
+    C_m3_per_sPa: float
+    b_critical: float = 0.5
+
+
+def iso6358_mass_flow_kg_per_s(C, b, p_up_Pa, T_up_K, p_down_Pa, gas: Gas = AIR):
+    """Mass flow from upstream (p_up >= p_down) to downstream, eqs (6)-(7).
+
+    Choked (p2/p1 <= b): q = C p1 rho_ref sqrt(T_ref/T1); subsonic: times
+    sqrt(1 - ((p2/p1 - b)/(1 - b))^2); zero at equal pressures (with the laminar rounding
+    described at LAMINAR_RATIO).
+    """
+    ratio = np.minimum(p_down_Pa / p_up_Pa, 1.0)
+    choked = C * p_up_Pa * gas.rho_ref_kg_per_m3 * np.sqrt(T_REF_K / T_up_K)
+    r_lam = 1.0 - LAMINAR_RATIO
+    r_sub = np.minimum(ratio, r_lam)
+    factor = np.sqrt(np.maximum(1.0 - ((np.maximum(r_sub, b) - b) / (1.0 - b)) ** 2, 0.0))
+    # In the laminar band scale the value at the band edge linearly down to 0 at ratio 1.
+    factor = np.where(ratio > r_lam, factor * (1.0 - ratio) / LAMINAR_RATIO, factor)
+    return choked * factor
+
+
+def orifice_flow_kg_per_s(C, b, p_a_Pa, T_a_K, p_b_Pa, T_b_K, gas: Gas = AIR):
+    """Signed ISO 6358 flow from node a to node b (negative when b is upstream)."""
+    forward = p_a_Pa >= p_b_Pa
+    p_up = np.where(forward, p_a_Pa, p_b_Pa)
+    p_down = np.where(forward, p_b_Pa, p_a_Pa)
+    T_up = np.where(forward, T_a_K, T_b_K)
+    q = iso6358_mass_flow_kg_per_s(C, b, p_up, T_up, p_down, gas)
+    return np.where(forward, q, -q)

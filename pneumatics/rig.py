@@ -1,0 +1,225 @@
+"""Virtual test rig for a bellow (with or without its auxiliary tank) under prescribed crushing (paper §3).
+
+Experiments: ramp (Fig. 3), sinusoidal time histories (Fig. 5), the dynamic-stiffness sweep on the
+periodic steady state (eq. 9, Fig. 6) and the quasi-static stiffness (Table 2).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Dict, Iterable, List, Optional
+
+import numpy as np
+
+from .chamber import Bellow, Tank, quasi_static_stiffness_N_per_m
+from .circuit import Circuit
+from .integrate import Motion, simulate, stable_step_s
+from .periodic import one_period, periodic_steady_state, sine_phase_motion
+from .pipe import Pipe
+
+BELLOW, TANK, PIPE = "bellow", "tank", "pipe"
+
+
+def bellow_tank_components(bellow: Bellow, tank: Optional[Tank], pipe: Optional[Pipe]) -> Dict[str, object]:
+    """The rig's circuit: a bellow, and optionally a tank joined to it by a pipe (Fig. 4a)."""
+    comps: Dict[str, object] = {BELLOW: bellow}
+    if tank is not None:
+        comps[TANK] = tank
+        comps[PIPE] = Pipe(BELLOW, TANK, **{k: v for k, v in vars(pipe).items() if k not in ("a", "b")})
+    return comps
+
+
+def ramp_motion(amplitude_m: float, ramp_s: float) -> Motion:
+    """Crushing rising linearly from 0 to ``amplitude_m`` over ``ramp_s``, then held."""
+    rate = amplitude_m / ramp_s
+
+    def motion(t):
+        return np.array([amplitude_m * min(t / ramp_s, 1.0)]), np.array([rate if t < ramp_s else 0.0])
+    return motion
+
+
+def sine_motion(amplitude_m: float, frequency_Hz: float) -> Motion:
+    """z = a sin(2 pi f t)."""
+    w = 2.0 * math.pi * frequency_Hz
+
+    def motion(t):
+        return np.array([amplitude_m * math.sin(w * t)]), np.array([amplitude_m * w * math.cos(w * t)])
+    return motion
+
+
+@dataclass
+class TimeSeries:
+    """Rig response sampled at ``t_s``; per-chamber arrays are (chambers, samples)."""
+
+    t_s: np.ndarray
+    z_m: np.ndarray
+    force_N: np.ndarray
+    p_Pa: np.ndarray
+    T_K: np.ndarray
+    chamber_names: List[str]
+
+
+def run_time_series(components: Dict[str, object], k_W_per_K: float, motion: Motion, t_end_s: float,
+                    n_samples: int, max_step_s: float = np.inf, p0_Pa: Optional[Dict[str, float]] = None,
+                    rtol: float = 1e-8) -> TimeSeries:
+    """Integrate the rig with scipy's LSODA (error-controlled) and sample it uniformly."""
+    circuit = Circuit(components, k_W_per_K=k_W_per_K)
+    x0 = circuit.initial_state(p0_Pa)
+    t = np.linspace(0.0, t_end_s, n_samples)
+    sol = simulate(circuit, x0, t_end_s, motion, t_eval=t, max_step_s=max_step_s, rtol=rtol)
+    z = np.array([motion(ti)[0] for ti in t]).T
+    out = circuit.outputs(sol.y, z)
+    return TimeSeries(t, z[0], out.bellow_force_N[0], out.p_Pa, out.T_K, circuit.chamber_names)
+
+
+@dataclass
+class StiffnessPoint:
+    """One (k, f) case of the dynamic-stiffness sweep, on its periodic steady state."""
+
+    k_W_per_K: float
+    frequency_Hz: float
+    K_dyn_N_per_m: float          # eq. (9): (Fmax - Fmin) / (2 z_max)
+    F_min_N: float
+    F_max_N: float
+    T_bellow_mean_K: float
+    T_bellow_max_K: float
+    stabilised: bool
+    residual: float               # scaled periodicity residual
+    floquet_max: float            # largest Floquet multiplier modulus (< 1: the orbit attracts)
+    cycles_to_settle: float       # cycles for a disturbance to decay by 1e3 (from floquet_max)
+    pipe_velocity_max_m_per_s: float
+
+
+def sweep_step_counts(frequencies_Hz: np.ndarray, dt_max_s: float, n_min: int) -> np.ndarray:
+    """RK4 steps per period: at least ``n_min``, and short enough for the stiffest case (dt_max)."""
+    return np.maximum(n_min, np.ceil(1.0 / (np.asarray(frequencies_Hz) * dt_max_s))).astype(int)
+
+
+def _group_by_steps(steps: np.ndarray, ratio: float = 1.3) -> List[np.ndarray]:
+    """Indices of cases grouped so that each group's step count is within ``ratio`` of its smallest."""
+    order = np.argsort(steps)
+    groups, current = [], [order[0]]
+    for i in order[1:]:
+        if steps[i] <= ratio * steps[current[0]]:
+            current.append(i)
+        else:
+            groups.append(np.array(current))
+            current = [i]
+    groups.append(np.array(current))
+    return groups
+
+
+def dynamic_stiffness_sweep(components: Dict[str, object], k_values: Iterable[float], frequencies_Hz: Iterable[float],
+                            amplitude_m: float, p0_Pa: Optional[Dict[str, float]] = None, n_min: int = 400,
+                            dt_max_s: float = 5e-3, tol: float = 1e-9, max_iter: int = 20,
+                            progress: Optional[Callable[[str], None]] = None) -> List[StiffnessPoint]:
+    """K_dyn (eq. 9) on the periodic steady state, for every k and frequency.
+
+    Cases (k, f) whose periods need similar numbers of RK4 steps (``dt_max_s`` or the thermal
+    stability limit of the largest finite k, at least ``n_min`` per period) are solved as one
+    batch. Where Newton fails for a k (small k run very hot near the pipe resonance, far from the
+    atmospheric start), it is continued from the next larger k's periodic state at the same
+    frequency through intermediate k values.
+    """
+    ks = np.array(sorted(set(float(k) for k in k_values), reverse=True))
+    freqs = np.array(sorted(set(float(f) for f in frequencies_Hz)))
+    k_cases, f_cases = (a.ravel() for a in np.meshgrid(ks, freqs, indexing="ij"))
+    probe = Circuit(components, k_W_per_K=k_cases)
+    x_rest = probe.initial_state(p0_Pa)[:, 0]
+    dt = stable_step_s(probe, x_rest, dt_max_s)
+    steps = sweep_step_counts(f_cases, dt, n_min)
+    points: List[StiffnessPoint] = []
+    for group in _group_by_steps(steps):
+        n_steps = int(steps[group].max())
+        f, k = f_cases[group], k_cases[group]
+        if progress:
+            progress(f"{group.size} cases, {f.min():g}-{f.max():g} Hz, {n_steps} RK4 steps per period")
+        circuit, res = _solve_with_continuation(components, k, f, x_rest, amplitude_m, n_steps, tol, max_iter)
+        points += _stiffness_points(circuit, res, f, k, amplitude_m, n_steps)
+    points.sort(key=lambda p: (-p.k_W_per_K, p.frequency_Hz))
+    return points
+
+
+def _solve_with_continuation(components, k, f, x_rest, amplitude_m, n_steps, tol, max_iter):
+    """Batched shooting for cases (k, f); failed cases are continued in k (see dynamic_stiffness_sweep)."""
+    motion = sine_phase_motion(amplitude_m)
+
+    def solve(k_c, x_start, period_s):
+        circuit = Circuit(components, k_W_per_K=k_c)
+        return circuit, periodic_steady_state(circuit, x_start, period_s, motion, n_steps=n_steps, tol=tol,
+                                              max_iter=max_iter)
+
+    circuit, res = solve(k, np.repeat(x_rest[:, None], k.size, axis=1), 1.0 / f)
+    # Retry each failed case once, all together, from the periodic state of its nearest
+    # converged neighbour: the next larger k at the same frequency, else the nearest frequency
+    # at the same k.
+    failed = np.flatnonzero(~res.stabilised & (k > 0))
+    starts = []
+    for i in failed:
+        same_f = np.flatnonzero((f == f[i]) & (k > k[i]) & res.stabilised)
+        same_k = np.flatnonzero((k == k[i]) & res.stabilised)
+        donor = same_f[np.argmin(k[same_f])] if same_f.size else (
+            same_k[np.argmin(np.abs(np.log(f[same_k] / f[i])))] if same_k.size else None)
+        starts.append(None if donor is None else res.x0[:, donor])
+    retry = np.array([i for i, s in zip(failed, starts) if s is not None], dtype=int)
+    if retry.size:
+        x_retry = np.stack([s for s in starts if s is not None], axis=1)
+        _, again = solve(k[retry], x_retry, 1.0 / f[retry])
+        better = again.stabilised
+        for name in ("x0", "residual", "floquet_max", "converged"):
+            getattr(res, name)[..., retry[better]] = getattr(again, name)[..., better]
+    return circuit, res
+
+
+def _stiffness_points(circuit: Circuit, res, f: np.ndarray, k: float, amplitude_m: float, n_steps: int):
+    forces, temps, flows = [], [], []
+    ib = circuit.chamber_names.index(BELLOW)
+    motion = sine_phase_motion(amplitude_m)
+
+    def observe(tau, x):
+        z, _ = motion(tau, 1.0 / f)
+        forces.append(circuit.bellow_forces_N(x, z)[0])
+        temps.append(x[circuit.layout.T][ib])
+        flows.append(np.max(np.abs(x[circuit.layout.q]), axis=0) if circuit.layout.n_pipes else np.zeros(f.size))
+
+    one_period(circuit, res.x0, 1.0 / f, motion, n_steps, observe)
+    F, T, q = np.array(forces), np.array(temps), np.array(flows)
+    v_max = np.zeros(f.size)
+    if PIPE in circuit.components:
+        pipe = circuit.components[PIPE]
+        rho = np.min(circuit.outputs(res.x0, np.zeros((1, f.size))).p_Pa / (circuit.gas.R_J_per_kgK * res.x0[circuit.layout.T]), axis=0)
+        v_max = q.max(axis=0) / (rho * pipe.area_m2)
+    out = []
+    for i in range(f.size):
+        fl = res.floquet_max[i]
+        settle = math.log(1e-3) / math.log(fl) if 0.0 < fl < 1.0 else (0.0 if fl == 0.0 else math.inf)
+        out.append(StiffnessPoint(float(np.broadcast_to(k, f.shape)[i]), float(f[i]), float((F[:, i].max() - F[:, i].min()) / (2 * amplitude_m)),
+                                  float(F[:, i].min()), float(F[:, i].max()), float(T[:, i].mean()), float(T[:, i].max()),
+                                  bool(res.stabilised[i]), float(res.residual[i]), float(fl), settle, float(v_max[i])))
+    return out
+
+
+@dataclass
+class QuasiStaticStiffness:
+    """Table 2: analytic n A^2 p0 / V and the simulated slope of a slow small ramp."""
+
+    configuration: str     # "bellow and tank" or "bellow only"
+    regime: str            # "adiabatic" or "isothermal"
+    analytic_N_per_m: float
+    simulated_N_per_m: float
+
+
+def quasi_static_stiffness_table(bellow: Bellow, tank: Tank, pipe: Pipe, p0_Pa: float, gamma: float,
+                                 amplitude_m: float = 1e-3, ramp_s: float = 20.0) -> List[QuasiStaticStiffness]:
+    """Table 2 analytically and by simulation: a 1 mm ramp over 20 s (the pipe flow is then
+    quasi-static: its pressure drop is < 1e-6 of p0) for k = 0 and k = inf."""
+    rows = []
+    for config, tank_ in (("bellow and tank", tank), ("bellow only", None)):
+        V = bellow.V0_m3 + (tank_.V_m3 if tank_ else 0.0)
+        comps = bellow_tank_components(bellow, tank_, pipe)
+        p0 = {name: p0_Pa for name, c in comps.items() if isinstance(c, (Bellow, Tank))}
+        for regime, k, n in (("adiabatic", 0.0, gamma), ("isothermal", math.inf, 1.0)):
+            ts = run_time_series(comps, k, ramp_motion(amplitude_m, ramp_s), ramp_s, 3, p0_Pa=p0)
+            rows.append(QuasiStaticStiffness(config, regime, quasi_static_stiffness_N_per_m(bellow.A0_m2, p0_Pa, V, n),
+                                             (ts.force_N[-1] - ts.force_N[0]) / amplitude_m))
+    return rows

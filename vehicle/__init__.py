@@ -1,0 +1,9 @@
+"""Vehicle side of pneumorail: exudyn model of the metro car and its parameters.
+
+* :mod:`vehicle.params` -- :class:`~vehicle.params.VehicleParams` (SI, documented defaults);
+* :mod:`vehicle.car` -- :class:`~vehicle.car.MetroCar`, the multibody model the co-simulation
+  master drives macro-step by macro-step;
+* :mod:`vehicle.track` -- track centre-line geometry (curve entry).
+
+This package must not import ``pneumatics`` or ``cosim``.
+"""
