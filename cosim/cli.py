@@ -1,0 +1,90 @@
+"""Command line: ``pneumorail run | check | compare``.
+
+Exit codes: 0 success (for ``check``: every limit holds), 1 a limit is violated or a run
+diverged, 2 bad input (the message names the file, the key path and what was expected).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import List, Optional, Sequence
+
+from .results import Progress
+from .schema import ScenarioError, coerce
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _k_list(text: str) -> List[float]:
+    out = []
+    for item in text.split(","):
+        item = item.strip()
+        try:
+            k = math.inf if item.lower() in ("inf", ".inf", "infinity") else float(item)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"--k expects comma-separated numbers or inf, got {item!r}") from None
+        if not k >= 0:
+            raise argparse.ArgumentTypeError(f"k must be >= 0 W/K, got {item}")
+        out.append(k)
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="pneumorail", description=__doc__.split("\n")[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    for name, help_ in (("run", "run a scenario and write its results"),
+                        ("check", "run a scenario and check the limits of its 'checks:' section")):
+        s = sub.add_parser(name, help=help_)
+        s.add_argument("scenario", type=Path, help="scenario YAML file")
+        s.add_argument("--out", type=Path, default=None, help="output folder (default: results/<scenario name>)")
+        s.add_argument("--k", type=_k_list, default=None, help="override the k values [W/K], e.g. 0,10,inf")
+        s.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a scenario value, e.g. --set twist.hold_s=10 (repeatable)")
+        s.add_argument("--jobs", type=int, default=None, help="parallel processes for the k cases")
+        s.add_argument("--quiet", action="store_true", help="no progress lines")
+    c = sub.add_parser("compare", help="overlay the results of several runs")
+    c.add_argument("dirs", type=Path, nargs="+", help="output folders of earlier runs")
+    c.add_argument("--out", type=Path, default=Path("results/compare"), help="folder for the comparison plots")
+    return p
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        if args.command == "compare":
+            from .compare import compare_runs
+            for path in compare_runs(args.dirs, args.out):
+                print(path)
+            return EXIT_OK
+        return _run(args)
+    except ScenarioError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def _run(args) -> int:
+    from .runner import run_scenario
+    from .scenario import load_scenario
+    overrides = list(args.overrides)
+    if args.jobs is not None:
+        overrides.append(f"solver.jobs={args.jobs}")
+    scenario = load_scenario(args.scenario, overrides, args.k)
+    out = args.out or Path("results") / scenario.name
+    progress = Progress(scenario.name, stream=open("/dev/null", "w") if args.quiet else None)
+    outcome = run_scenario(scenario, out, progress)
+    print(outcome.report())
+    print(f"results in {out}/")
+    if outcome.diverged:
+        return EXIT_FAILED
+    if args.command == "check":
+        if not scenario.checks:
+            raise ScenarioError(scenario.file, ["checks"], "no checks to evaluate: add e.g. checks: ['dqq_max <= 0.6']")
+        print(outcome.check_report())
+        return EXIT_OK if outcome.checks_hold() else EXIT_FAILED
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,111 @@
+"""Writing results: CSV with unit-carrying headers, run.json provenance, progress lines."""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import platform
+import sys
+import time
+from importlib import metadata
+from pathlib import Path
+from typing import Dict, Iterable, Mapping, Sequence
+
+import numpy as np
+
+
+def write_columns(path: Path, columns: Mapping[str, Sequence[float]]) -> None:
+    """A CSV of equal-length numeric columns (header = column names, which carry units)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    names = list(columns)
+    data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
+    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
+
+
+def write_rows(path: Path, rows: Iterable[Mapping[str, object]]) -> None:
+    """A CSV with one row per mapping (the first row's keys are the header)."""
+    rows = list(rows)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as fh:
+        if not rows:
+            return
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: _fmt(v) for k, v in row.items()})
+
+
+def read_rows(path: Path):
+    with Path(path).open() as fh:
+        return list(csv.DictReader(fh))
+
+
+def _fmt(v):
+    if isinstance(v, (float, np.floating)):
+        return "inf" if math.isinf(v) else ("nan" if math.isnan(v) else f"{v:.10g}")
+    return v
+
+
+def k_label(k: float) -> str:
+    """k for file names and legends: 0, 10, 1e+04, inf."""
+    return "inf" if math.isinf(k) else f"{k:g}"
+
+
+def versions() -> Dict[str, str]:
+    out = {"python": platform.python_version()}
+    for dist in ("pneumorail", "exudyn", "numpy", "scipy", "pyyaml", "matplotlib"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+def write_run_json(out_dir: Path, scenario, wall_s: float, extra: Mapping[str, object] = ()) -> None:
+    """Provenance: what ran (scenario file, content hash, overrides, k values, settings), with
+    which versions, and how long it took."""
+    info = {
+        "scenario_file": str(scenario.file),
+        "scenario_sha256": scenario.content_sha256,
+        "kind": scenario.kind,
+        "name": scenario.name,
+        "overrides": list(scenario.overrides),
+        "k_W_per_K": [k_label(k) for k in scenario.k_W_per_K],
+        "settings": _jsonable(scenario.raw),
+        "versions": versions(),
+        "command": " ".join(sys.argv),
+        "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "wall_time_s": round(wall_s, 3),
+        **dict(extra),
+    }
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "run.json").write_text(json.dumps(info, indent=2) + "\n")
+
+
+def _jsonable(v):
+    if isinstance(v, dict):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, float) and (math.isinf(v) or math.isnan(v)):
+        return str(v)
+    return v
+
+
+class Progress:
+    """Progress lines on stderr with elapsed wall time (only when a run takes more than a moment)."""
+
+    def __init__(self, label: str, stream=None, min_interval_s: float = 2.0):
+        self.label, self.stream, self.min_interval_s = label, stream or sys.stderr, min_interval_s
+        self.t0 = time.perf_counter()
+        self._last = -math.inf
+
+    def __call__(self, message: str, force: bool = True) -> None:
+        now = time.perf_counter()
+        if force or now - self._last >= self.min_interval_s:
+            self._last = now
+            print(f"[{self.label} {now - self.t0:6.1f} s] {message}", file=self.stream, flush=True)
+
+    @property
+    def elapsed_s(self) -> float:
+        return time.perf_counter() - self.t0

@@ -1,0 +1,158 @@
+"""Run the bellow-tank virtual test rig scenarios (paper §3): outputs CSV, PNG and run.json."""
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+
+from pneumatics.chamber import quasi_static_stiffness_N_per_m
+from pneumatics.gas import AIR
+from pneumatics.rig import (dynamic_stiffness_sweep, quasi_static_stiffness_table, ramp_motion, run_time_series,
+                            sine_motion)
+
+from .plots import Curve, Panel, k_legend, save_panels
+from .results import Progress, k_label, write_columns, write_rows, write_run_json
+from .scenario import RampTest, Scenario, SineTest
+
+#: Mach number of the pipe flow above which eq. (5)'s incompressible law is outside its validity.
+MACH_WARNING = 0.3
+
+
+def run_rig(scenario: Scenario, out_dir: Path, progress: Progress) -> List[Dict[str, object]]:
+    """Run a rig scenario into ``out_dir``; returns the summary rows."""
+    t0 = time.perf_counter()
+    runner = {"rig_ramp": _ramp, "rig_sine": _sine, "rig_stiffness": _stiffness, "rig_table2": _table2}[scenario.kind]
+    rows = runner(scenario, out_dir, progress)
+    write_rows(out_dir / "summary.csv", rows)
+    write_run_json(out_dir, scenario, time.perf_counter() - t0)
+    return rows
+
+
+def _series_columns(ts) -> Dict[str, np.ndarray]:
+    cols = {"t_s": ts.t_s, "z_m": ts.z_m, "F_bellow_N": ts.force_N}
+    for i, name in enumerate(ts.chamber_names):
+        cols[f"p_{name}_Pa"] = ts.p_Pa[i]
+        cols[f"T_{name}_K"] = ts.T_K[i]
+    return cols
+
+
+def _ramp(scenario: Scenario, out: Path, progress: Progress):
+    test: RampTest = scenario.test
+    rig = scenario.rig
+    rows, panels = [], []
+    for config in test.configurations:
+        comps = rig.components(with_tank=config == "bellow_tank" and rig.tank is not None)
+        curves, temps = [], []
+        for k in scenario.k_W_per_K:
+            progress(f"ramp {config}, k = {k_label(k)} W/K")
+            ts = run_time_series(comps, k, ramp_motion(test.amplitude_m, test.ramp_s), test.duration_s, test.samples,
+                                 max_step_s=test.ramp_s / 50, p0_Pa=rig.initial_pressures(comps))
+            write_columns(out / "timeseries" / f"ramp_{config}_k={k_label(k)}.csv", _series_columns(ts))
+            curves.append(Curve(ts.t_s, ts.force_N / 1e3, k_legend(k)))
+            temps.append(Curve(ts.t_s, ts.T_K[0], k_legend(k)))
+            rows.append({"configuration": config, "k_W_per_K": k, "F_initial_N": ts.force_N[0],
+                         "F_peak_N": ts.force_N.max(), "F_final_N": ts.force_N[-1],
+                         "T_bellow_max_K": ts.T_K[0].max(), "T_bellow_final_K": ts.T_K[0][-1]})
+        title = "bellow + tank" if config == "bellow_tank" else "bellow alone"
+        panels.append(Panel(curves, "time t [s]", "bellow force F [kN]", f"{test.amplitude_m * 1e3:g} mm ramp in {test.ramp_s:g} s, {title}"))
+        panels.append(Panel(temps, "time t [s]", "bellow temperature T [K]", title))
+    save_panels(out / "fig3_ramp_force.png", panels, "Bellow reaction force to a compression ramp (paper Fig. 3)", ncols=2)
+    return rows
+
+
+def _sine(scenario: Scenario, out: Path, progress: Progress):
+    test: SineTest = scenario.test
+    rig = scenario.rig
+    comps = rig.components(with_tank=rig.tank is not None)
+    period = 1.0 / test.frequency_Hz
+    n = int(round(test.duration_s / period * test.samples_per_period)) + 1
+    rows, curves, pcurves = [], [], []
+    for k in scenario.k_W_per_K:
+        progress(f"sine {test.frequency_Hz:g} Hz, {test.duration_s:g} s, k = {k_label(k)} W/K")
+        ts = run_time_series(comps, k, sine_motion(test.amplitude_m, test.frequency_Hz), test.duration_s, n,
+                             max_step_s=period / 20, p0_Pa=rig.initial_pressures(comps))
+        write_columns(out / "timeseries" / f"sine_{test.frequency_Hz:g}Hz_k={k_label(k)}.csv", _series_columns(ts))
+        curves.append(Curve(ts.t_s, ts.T_K[0], k_legend(k)))
+        pcurves.append(Curve(ts.t_s, ts.p_Pa[0] / 1e5, k_legend(k)))
+        rows.append({"k_W_per_K": k, "frequency_Hz": test.frequency_Hz, **_sine_summary(ts, test)})
+    save_panels(out / "fig5_bellow_temperature.png",
+                [Panel(curves, "time t [s]", "bellow temperature T [K]",
+                       f"{test.amplitude_m * 1e3:g} mm sine at {test.frequency_Hz:g} Hz"),
+                 Panel(pcurves, "time t [s]", "bellow pressure p [bar abs]")],
+                "Bellow temperature history (paper Fig. 5)")
+    return rows
+
+
+def _sine_summary(ts, test: SineTest) -> Dict[str, object]:
+    """Mean bellow temperature over the first and last tenth of the run, and its drift per
+    period over the last tenth: ``stabilised`` when that drift is below 1e-3 K per period."""
+    spp = test.samples_per_period
+    T = ts.T_K[0]
+    n_per = (T.size - 1) // spp
+    means = np.array([T[i * spp:(i + 1) * spp].mean() for i in range(n_per)])
+    tail = means[-max(2, n_per // 10):]
+    drift = (tail[-1] - tail[0]) / max(tail.size - 1, 1)
+    return {"T_bellow_mean_first_period_K": means[0], "T_bellow_mean_last_period_K": means[-1],
+            "T_bellow_max_K": T.max(), "T_bellow_min_K": T.min(),
+            "T_mean_drift_K_per_period": drift, "stabilised": bool(abs(drift) < 1e-3),
+            "p_bellow_mean_last_period_Pa": ts.p_Pa[0][-spp:].mean()}
+
+
+def _stiffness(scenario: Scenario, out: Path, progress: Progress):
+    test = scenario.test
+    rig = scenario.rig
+    comps = rig.components(with_tank=rig.tank is not None)
+    t0 = time.perf_counter()
+    points = dynamic_stiffness_sweep(comps, scenario.k_W_per_K, test.frequencies_Hz, test.amplitude_m,
+                                     p0_Pa=rig.initial_pressures(comps), progress=progress)
+    wall = time.perf_counter() - t0
+    rows = []
+    sound = math.sqrt(AIR.gamma * AIR.R_J_per_kgK * 293.15)
+    for p in points:
+        rows.append({"k_W_per_K": p.k_W_per_K, "frequency_Hz": p.frequency_Hz,
+                     # a case that has not stabilised gets no stiffness, only its diagnosis
+                     "K_dyn_N_per_m": p.K_dyn_N_per_m if p.stabilised else math.nan,
+                     "T_bellow_mean_K": p.T_bellow_mean_K if p.stabilised else math.nan,
+                     "T_bellow_max_K": p.T_bellow_max_K if p.stabilised else math.nan,
+                     "stabilised": p.stabilised, "periodicity_residual": p.residual,
+                     "floquet_max": p.floquet_max, "cycles_to_settle": p.cycles_to_settle,
+                     "pipe_velocity_max_m_per_s": p.pipe_velocity_max_m_per_s if p.stabilised else math.nan})
+    fast = [p for p in points if p.stabilised and p.pipe_velocity_max_m_per_s > MACH_WARNING * sound]
+    if fast:
+        worst = max(fast, key=lambda p: p.pipe_velocity_max_m_per_s)
+        progress(f"warning: in {len(fast)} cases the pipe velocity exceeds Mach {MACH_WARNING} "
+                 f"(up to {worst.pipe_velocity_max_m_per_s:.0f} m/s at {worst.frequency_Hz:g} Hz, k = {k_label(worst.k_W_per_K)}): "
+                 "the incompressible pipe law (eq. 5) is outside its validity there")
+    unstable = [p for p in points if not p.stabilised]
+    if unstable:
+        progress(f"{len(unstable)} of {len(points)} cases did not reach a stable periodic state (stabilised = False "
+                 "in summary.csv, no K_dyn reported)")
+    curves = []
+    for k in scenario.k_W_per_K:
+        pts = [p for p in points if p.k_W_per_K == k and p.stabilised]
+        if pts:
+            curves.append(Curve([p.frequency_Hz for p in pts], [p.K_dyn_N_per_m / 1e3 for p in pts], k_legend(k), "o-"))
+    b, t = rig.bellow, rig.tank
+    V_all = b.V0_m3 + (t.V_m3 if t else 0.0)
+    ref = [(quasi_static_stiffness_N_per_m(b.A0_m2, rig.p0_Pa, V_all, n) / 1e3, f"{name}, V = {V_all * 1e3:g} dm3")
+           for n, name in ((AIR.gamma, "adiabatic"), (1.0, "isothermal"))]
+    ref += [(quasi_static_stiffness_N_per_m(b.A0_m2, rig.p0_Pa, b.V0_m3, n) / 1e3, f"{name}, bellow alone")
+            for n, name in ((AIR.gamma, "adiabatic"), (1.0, "isothermal"))] if t else []
+    save_panels(out / "fig6_dynamic_stiffness.png",
+                [Panel(curves, "frequency f [Hz]", "dynamic stiffness K_dyn [kN/m]",
+                       f"{test.amplitude_m * 1e3:g} mm amplitude, periodic steady state (unstabilised cases omitted)",
+                       logx=True, hlines=ref)], "Dynamic stiffness of the bellow-tank subsystem (paper Fig. 6)")
+    progress(f"sweep of {len(points)} cases took {wall:.1f} s")
+    return rows
+
+
+def _table2(scenario: Scenario, out: Path, progress: Progress):
+    rig, test = scenario.rig, scenario.test
+    progress("quasi-static stiffness (Table 2)")
+    table = quasi_static_stiffness_table(rig.bellow, rig.tank, rig.pipe, rig.p0_Pa, AIR.gamma, test.amplitude_m, test.ramp_s)
+    return [{"configuration": r.configuration, "regime": r.regime, "analytic_N_per_m": r.analytic_N_per_m,
+             "simulated_N_per_m": r.simulated_N_per_m,
+             "relative_difference": r.simulated_N_per_m / r.analytic_N_per_m - 1.0} for r in table]

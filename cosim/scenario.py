@@ -1,0 +1,379 @@
+"""Scenario files: load (``yaml.safe_load`` only), apply ``--set`` overrides, validate everything
+before any simulation starts, and build the typed scenario the runners consume.
+
+A scenario is a YAML mapping with a ``kind``:
+
+* ``rig_ramp``, ``rig_sine``, ``rig_stiffness``, ``rig_table2``: the bellow-tank virtual test
+  rig (paper §3) with a ``circuit`` of ``bellow``, ``tank`` (null: bellow alone), ``pipe``,
+  ``p0_Pa`` and a ``test`` section;
+* ``twist``: the metro car on the EN 14363 twist (paper §4.1) with ``vehicle``, a car
+  ``circuit``, ``twist``, ``solver`` and ``checks``.
+
+Every error names the file, the key path and what was expected (:class:`ScenarioError`).
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
+
+import yaml
+
+from pneumatics.boundary import Supply
+from pneumatics.chamber import Bellow, Tank
+from pneumatics.circuit import Circuit, CircuitError
+from pneumatics.layouts import BELLOWS, car_circuit
+from pneumatics.pipe import Pipe
+from pneumatics.valves import DifferentialPressureValve, LevellingValve
+from vehicle.params import VehicleParams
+
+from .schema import ScenarioError, build, check_keys, coerce, k_values, require
+
+RIG_KINDS = ("rig_ramp", "rig_sine", "rig_stiffness", "rig_table2")
+CAR_KINDS = ("twist",)
+KINDS = RIG_KINDS + CAR_KINDS
+
+
+# ----------------------------------------------------------------------------------- tests
+@dataclass(frozen=True)
+class RampTest:
+    """Fig. 3: crushing ramp to ``amplitude_m`` in ``ramp_s``, held until ``duration_s``."""
+
+    amplitude_m: float = 0.02
+    ramp_s: float = 1.0
+    duration_s: float = 30.0
+    samples: int = 601
+    configurations: Tuple[str, ...] = ("bellow_tank", "bellow_only")
+
+
+@dataclass(frozen=True)
+class SineTest:
+    """Fig. 5: z = a sin(2 pi f t) for ``duration_s``; the time history is sampled ``samples_per_period`` times a period."""
+
+    amplitude_m: float = 0.02
+    frequency_Hz: float = 1.0
+    duration_s: float = 300.0
+    samples_per_period: int = 20
+
+
+@dataclass(frozen=True)
+class StiffnessTest:
+    """Fig. 6: K_dyn (eq. 9) on the periodic steady state for each frequency."""
+
+    amplitude_m: float = 0.02
+    frequencies_Hz: Tuple[float, ...] = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0)
+
+
+@dataclass(frozen=True)
+class QuasiStaticTest:
+    """Table 2: slope of a slow small ramp."""
+
+    amplitude_m: float = 1e-3
+    ramp_s: float = 20.0
+
+
+RIG_TESTS = {"rig_ramp": RampTest, "rig_sine": SineTest, "rig_stiffness": StiffnessTest, "rig_table2": QuasiStaticTest}
+
+
+@dataclass(frozen=True)
+class TwistTest:
+    """EN 14363 twist (Fig. 7): the rails under ``raised_wheels`` rise by the test height in
+    ``ramp_s`` (smooth cosine ramp), then hold for ``hold_s``.
+
+    Test height = twist x base. The twist limit of the track the car must negotiate depends on the
+    base length 2a (here the bogie centre distance): 7 permille for 2a <= 4 m, 20/2a + 2 permille
+    for 4 m < 2a <= 20 m, 3 permille above (the rule commonly quoted from EN 14363; set
+    ``twist_per_mille`` to override it).
+    """
+
+    base_m: float = 10.0
+    twist_per_mille: Optional[float] = None
+    raised_wheels: Tuple[str, ...] = ("1R", "2R")
+    ramp_s: float = 5.0
+    hold_s: float = 35.0
+
+    @property
+    def twist(self) -> float:
+        if self.twist_per_mille is not None:
+            return self.twist_per_mille / 1000.0
+        return en14363_twist_limit(self.base_m)
+
+    @property
+    def height_m(self) -> float:
+        return self.twist * self.base_m
+
+    @property
+    def duration_s(self) -> float:
+        return self.ramp_s + self.hold_s
+
+
+def en14363_twist_limit(base_m: float) -> float:
+    """Track twist [-] for a base 2a [m]: 7e-3 (2a <= 4 m), (20/2a + 2)e-3 (<= 20 m), 3e-3 above."""
+    if base_m <= 4.0:
+        return 7e-3
+    if base_m <= 20.0:
+        return (20.0 / base_m + 2.0) * 1e-3
+    return 3e-3
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Co-simulation settings (see cosim/master.py for the scheme)."""
+
+    macro_step_s: float = 0.005
+    mechanics_step_s: float = 0.005
+    pneumatic_step_s: float = 0.005
+    coupling: str = "linearised"
+    output_interval_s: float = 0.02
+    jobs: int = 2
+
+
+COUPLINGS = ("linearised", "explicit")
+
+
+# ----------------------------------------------------------------------------------- circuits
+@dataclass(frozen=True)
+class RigCircuit:
+    bellow: Bellow
+    tank: Optional[Tank]
+    pipe: Pipe
+    p0_Pa: float
+
+    def components(self, with_tank: bool = True) -> Dict[str, object]:
+        from pneumatics.rig import bellow_tank_components
+        return bellow_tank_components(self.bellow, self.tank if with_tank else None, self.pipe)
+
+    def initial_pressures(self, components) -> Dict[str, float]:
+        return {n: self.p0_Pa for n, c in components.items() if isinstance(c, (Bellow, Tank))}
+
+
+@dataclass(frozen=True)
+class CarCircuit:
+    """The car's circuit: ``four_point`` (one levelling valve per bellow) or ``two_point``;
+    ``valves`` false isolates every bellow (with its tank) from the supply and the other bellows."""
+
+    layout: str
+    bellow: Bellow
+    tank: Optional[Tank]
+    pipe: Pipe
+    valves: bool
+    levelling_valve: LevellingValve
+    differential_valve: Optional[DifferentialPressureValve]
+    supply: Supply
+    cross_pipe: Optional[Pipe]
+
+    def components(self) -> Dict[str, object]:
+        return car_circuit(self.bellow, self.tank, self.pipe,
+                           levelling=self.levelling_valve if self.valves else None,
+                           differential=self.differential_valve if self.valves else None,
+                           supply=self.supply, points=4 if self.layout == "four_point" else 2,
+                           cross_pipe=self.cross_pipe)
+
+
+@dataclass(frozen=True)
+class Check:
+    """A threshold on a summary metric, e.g. ``dqq_max <= 0.6``."""
+
+    metric: str
+    op: str
+    limit: float
+    text: str
+
+    def holds(self, value: float) -> bool:
+        return {"<=": value <= self.limit, "<": value < self.limit, ">=": value >= self.limit,
+                ">": value > self.limit}[self.op]
+
+
+CHECK_METRICS = {"twist": ("dqq_max",)}
+_CHECK = re.compile(r"^\s*([A-Za-z_]\w*)\s*(<=|<|>=|>)\s*([-+]?[0-9.]+(?:[eE][-+]?\d+)?)\s*$")
+
+
+# ----------------------------------------------------------------------------------- scenario
+@dataclass(frozen=True)
+class Scenario:
+    file: Path
+    kind: str
+    name: str
+    description: str
+    k_W_per_K: Tuple[float, ...]
+    content_sha256: str
+    overrides: Tuple[str, ...] = ()
+    rig: Optional[RigCircuit] = None
+    test: Any = None
+    vehicle: Optional[VehicleParams] = None
+    circuit: Optional[CarCircuit] = None
+    twist: Optional[TwistTest] = None
+    solver: SolverSettings = SolverSettings()
+    checks: Tuple[Check, ...] = ()
+    raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+
+def load_yaml(path: Path) -> Any:
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ScenarioError(path, [], f"cannot read the file ({exc.strerror})") from None
+    try:
+        return yaml.safe_load(text), text
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ScenarioError(path, [], f"not valid YAML{where}: {getattr(exc, 'problem', exc)}") from None
+
+
+def apply_overrides(data: Dict[str, Any], overrides: Sequence[str], file) -> Dict[str, Any]:
+    """``key.path=value`` (value parsed as YAML) into a copy of ``data``."""
+    import copy
+    data = copy.deepcopy(data)
+    for item in overrides:
+        if "=" not in item:
+            raise ScenarioError(file, ["--set"], f"expected key.path=value, got {item!r}")
+        key, value = item.split("=", 1)
+        parts = key.strip().split(".")
+        node = data
+        for i, p in enumerate(parts[:-1]):
+            if not isinstance(node.get(p), dict):
+                if p in node:
+                    raise ScenarioError(file, parts[: i + 1], "--set cannot descend into a value that is not a mapping")
+                node[p] = {}
+            node = node[p]
+        node[parts[-1]] = yaml.safe_load(value)
+    return data
+
+
+def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequence[float]] = None) -> Scenario:
+    """Read and validate a scenario file; raises :class:`ScenarioError` before anything runs."""
+    path = Path(path)
+    data, text = load_yaml(path)
+    if not isinstance(data, dict):
+        raise ScenarioError(path, [], f"expected a mapping at the top level, got {type(data).__name__}")
+    data = apply_overrides(data, overrides, path)
+    kind = require(data, "kind", path, [], str)
+    if kind not in KINDS:
+        raise ScenarioError(path, ["kind"], f"unknown kind {kind!r} (expected one of {', '.join(KINDS)})")
+    common = dict(file=path, kind=kind, name=str(data.get("name", path.stem)),
+                  description=str(data.get("description", "")),
+                  k_W_per_K=tuple(k_override) if k_override else k_values(require(data, "k_W_per_K", path, []), path, ["k_W_per_K"]),
+                  content_sha256=hashlib.sha256(text.encode()).hexdigest(), overrides=tuple(overrides), raw=data)
+    if kind in RIG_KINDS:
+        check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", "test"), path, [])
+        rig = _rig_circuit(require(data, "circuit", path, [], dict), path)
+        test = build(RIG_TESTS[kind], data.get("test"), path, ["test"])
+        if isinstance(test, RampTest):
+            for i, c in enumerate(test.configurations):
+                if c not in ("bellow_tank", "bellow_only"):
+                    raise ScenarioError(path, ["test", f"configurations[{i}]"], "expected bellow_tank or bellow_only")
+        if isinstance(test, StiffnessTest) and any(f <= 0 for f in test.frequencies_Hz):
+            raise ScenarioError(path, ["test", "frequencies_Hz"], "frequencies must be > 0 Hz")
+        return Scenario(**common, rig=rig, test=test)
+
+    check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", "twist", "solver", "checks"), path, [])
+    vehicle = _vehicle(data.get("vehicle"), path)
+    circuit = _car_circuit(require(data, "circuit", path, [], dict), path)
+    solver = build(SolverSettings, data.get("solver"), path, ["solver"])
+    if solver.coupling not in COUPLINGS:
+        raise ScenarioError(path, ["solver", "coupling"], f"expected one of {COUPLINGS}, got {solver.coupling!r}")
+    twist = build(TwistTest, data.get("twist"), path, ["twist"])
+    from vehicle.car import WHEELS
+    for i, w in enumerate(twist.raised_wheels):
+        if w not in WHEELS:
+            raise ScenarioError(path, ["twist", f"raised_wheels[{i}]"], f"unknown wheel {w!r} (wheels: {', '.join(WHEELS)})")
+    checks = _checks(data.get("checks", []), kind, path)
+    return Scenario(**common, vehicle=vehicle, circuit=circuit, twist=twist, solver=solver, checks=checks)
+
+
+def _component(cls, data, file, path, **fixed):
+    return build(cls, data, file, path, **fixed)
+
+
+def _rig_circuit(data: Mapping, file) -> RigCircuit:
+    check_keys(data, ("bellow", "tank", "pipe", "p0_Pa"), file, ["circuit"])
+    bellow = _component(Bellow, data.get("bellow"), file, ["circuit", "bellow"], p0_Pa=None, T0_K=None)
+    tank = None if ("tank" in data and data["tank"] is None) else _component(
+        Tank, data.get("tank"), file, ["circuit", "tank"], p0_Pa=None, T0_K=None)
+    pipe = _component(Pipe, data.get("pipe"), file, ["circuit", "pipe"], a="bellow", b="tank")
+    p0 = coerce(require(data, "p0_Pa", file, ["circuit"]), float, file, ["circuit", "p0_Pa"])
+    if not p0 > 0:
+        raise ScenarioError(file, ["circuit", "p0_Pa"], f"absolute pressure must be > 0 Pa, got {p0}")
+    rig = RigCircuit(bellow, tank, pipe, p0)
+    _compile_check(rig.components(tank is not None), file, ["circuit"], {"bellow": "bellow", "tank": "tank", "pipe": "pipe"})
+    return rig
+
+
+LAYOUTS = ("four_point", "two_point")
+
+
+def _car_circuit(data: Mapping, file) -> CarCircuit:
+    keys = ("layout", "bellow", "tank", "pipe", "valves", "levelling_valve", "differential_valve", "supply", "cross_pipe")
+    check_keys(data, keys, file, ["circuit"])
+    layout = coerce(data.get("layout", "four_point"), str, file, ["circuit", "layout"])
+    if layout not in LAYOUTS:
+        raise ScenarioError(file, ["circuit", "layout"], f"expected one of {LAYOUTS}, got {layout!r}")
+    P = ["circuit"]
+    bellow = _component(Bellow, data.get("bellow"), file, P + ["bellow"], p0_Pa=None, T0_K=None)
+    tank = None if ("tank" in data and data["tank"] is None) else _component(
+        Tank, data.get("tank"), file, P + ["tank"], p0_Pa=None, T0_K=None)
+    pipe = _component(Pipe, data.get("pipe"), file, P + ["pipe"], a="", b="")
+    valves = coerce(data.get("valves", False), bool, file, P + ["valves"])
+    lv = _component(LevellingValve, data.get("levelling_valve"), file, P + ["levelling_valve"],
+                    bellow="", supply="supply", sensed=())
+    dpv = None if ("differential_valve" in data and data["differential_valve"] is None) else _component(
+        DifferentialPressureValve, data.get("differential_valve"), file, P + ["differential_valve"], a="", b="")
+    supply = _component(Supply, data.get("supply"), file, P + ["supply"])
+    cross = _component(Pipe, data["cross_pipe"], file, P + ["cross_pipe"], a="", b="") if data.get("cross_pipe") else None
+    if layout == "two_point" and valves and cross is None:
+        raise ScenarioError(file, P + ["cross_pipe"], "a two_point layout with valves needs a cross_pipe between the bellows of a bogie")
+    spec = CarCircuit(layout, bellow, tank, pipe, valves, lv, dpv, supply, cross)
+    names = {**{b: "bellow" for b in BELLOWS}, **{f"tank_{b}": "tank" for b in BELLOWS},
+             **{f"pipe_{b}": "pipe" for b in BELLOWS}, **{f"lv_{b}": "levelling_valve" for b in BELLOWS},
+             "lv_F": "levelling_valve", "lv_R": "levelling_valve", "dpv_F": "differential_valve",
+             "dpv_R": "differential_valve", "supply": "supply", "cross_F": "cross_pipe", "cross_R": "cross_pipe"}
+    _compile_check(spec.components(), file, P, names)
+    return spec
+
+
+def _compile_check(components, file, prefix, yaml_key_of) -> None:
+    """Assemble once (cheap) so that inconsistent circuits fail before any simulation."""
+    try:
+        Circuit(components)
+    except CircuitError as exc:
+        name, *rest = exc.path
+        raise ScenarioError(file, [*prefix, yaml_key_of.get(name, name), *rest], exc.reason) from None
+
+
+def _vehicle(value, file) -> VehicleParams:
+    if value is None:
+        return VehicleParams()
+    if isinstance(value, str):
+        vpath = (Path(file).parent / value)
+        data, _ = load_yaml(vpath)
+        return build(VehicleParams, data, vpath, [])
+    if isinstance(value, dict):
+        base = value.get("file")
+        defaults = {}
+        if base is not None:
+            vpath = Path(file).parent / coerce(base, str, file, ["vehicle", "file"])
+            defaults, _ = load_yaml(vpath)
+        merged = {**(defaults or {}), **{k: v for k, v in value.items() if k != "file"}}
+        return build(VehicleParams, merged, file, ["vehicle"])
+    raise ScenarioError(file, ["vehicle"], f"expected a parameter file path or a mapping, got {type(value).__name__}")
+
+
+def _checks(value, kind, file) -> Tuple[Check, ...]:
+    if not isinstance(value, list):
+        raise ScenarioError(file, ["checks"], f"expected a list like ['dqq_max <= 0.6'], got {type(value).__name__}")
+    out = []
+    for i, text in enumerate(value):
+        m = _CHECK.match(text) if isinstance(text, str) else None
+        if not m:
+            raise ScenarioError(file, [f"checks[{i}]"], f"expected 'metric <= number' (or <, >=, >), got {text!r}")
+        metric, op, limit = m.group(1), m.group(2), float(m.group(3))
+        if metric not in CHECK_METRICS[kind]:
+            raise ScenarioError(file, [f"checks[{i}]"], f"unknown metric {metric!r} for a {kind} scenario "
+                                                        f"(known: {', '.join(CHECK_METRICS[kind])})")
+        out.append(Check(metric, op, limit, text.strip()))
+    return tuple(out)

@@ -1,0 +1,162 @@
+"""The EN 14363 twist test (paper §4.1, Figs 7-8): ΔQ/Q across heat-transfer coefficients."""
+from __future__ import annotations
+
+import math
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from pneumatics.circuit import Circuit
+from vehicle.car import BELLOWS, WHEELS, MetroCar
+
+from .criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading
+from .master import CoSimulation, Record
+from .plots import Curve, Panel, k_legend, save_panels
+from .results import Progress, k_label, write_columns, write_rows, write_run_json
+from .runner import Outcome
+from .scenario import Scenario, TwistTest
+
+
+def rail_heights(test: TwistTest):
+    """rail_height_m(t) -> (8,): the raised wheels follow 0.5 h (1 - cos(pi t / ramp)), then h."""
+    raised = np.array([w in test.raised_wheels for w in WHEELS], dtype=float)
+    h, ramp = test.height_m, test.ramp_s
+
+    def rail(t: float) -> np.ndarray:
+        s = min(max(t / ramp, 0.0), 1.0)
+        return raised * (h * 0.5 * (1.0 - math.cos(math.pi * s)))
+    return rail
+
+
+def build_cosimulation(scenario: Scenario, k_values: Sequence[float]) -> CoSimulation:
+    """Cars (one per k) in static equilibrium and the circuit with bellow pressures that carry them."""
+    settings = scenario.solver
+    cars = [MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=settings.mechanics_step_s)
+            for _ in k_values]
+    components = scenario.circuit.components()
+    circuit = Circuit(components, k_W_per_K=np.asarray(k_values, dtype=float))
+    if tuple(circuit.bellow_names) != BELLOWS:
+        raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
+    F0 = cars[0].static_bellow_forces_N()
+    p_atm = circuit.atmosphere.p_Pa
+    p0: Dict[str, float] = {}
+    for b, F in zip(BELLOWS, F0):
+        p0[b] = p_atm + F / components[b].area_m2(0.0)       # eq. (4) solved for p at z = 0
+        if f"tank_{b}" in components:
+            p0[f"tank_{b}"] = p0[b]
+    x0 = circuit.initial_state(p0, n_cases=len(k_values))
+    return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling)
+
+
+def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], float, List[float]]:
+    scenario, k_values, show_progress = args
+    t0 = time.perf_counter()
+    cosim = build_cosimulation(scenario, k_values)
+    progress = Progress(f"{scenario.name} k={','.join(k_label(k) for k in k_values)}") if show_progress else None
+    record, diagnosis = cosim.run(scenario.twist.duration_s, scenario.solver.output_interval_s, progress)
+    return record.arrays(), diagnosis, time.perf_counter() - t0, list(k_values)
+
+
+def _chunks(k_values: Sequence[float], jobs: int) -> List[List[float]]:
+    jobs = max(1, min(jobs, len(k_values)))
+    return [list(k_values[i::jobs]) for i in range(jobs)]
+
+
+def simulate_twist(scenario: Scenario, progress: Optional[Progress] = None):
+    """Run every k; returns (k values, merged record arrays (..., cases), diagnoses)."""
+    chunks = _chunks(scenario.k_W_per_K, scenario.solver.jobs)
+    tasks = [(scenario, chunk, progress is not None) for chunk in chunks]
+    if len(chunks) == 1:
+        results = [_run_chunk(tasks[0])]
+    else:
+        with ProcessPoolExecutor(len(chunks)) as pool:
+            results = list(pool.map(_run_chunk, tasks))
+    ks, arrays, diagnoses = [], [], []
+    for rec, diag, wall, chunk in results:
+        ks += chunk
+        arrays.append(rec)
+        if diag:
+            diagnoses.append(f"k = {','.join(k_label(k) for k in chunk)} W/K: {diag}")
+    n = min(len(a["t_s"]) for a in arrays)      # a diverged chunk stops early
+    merged = {name: np.concatenate([a[name][:n] for a in arrays], axis=-1) if name != "t_s" else arrays[0]["t_s"][:n]
+              for name in arrays[0]}
+    order = np.argsort([_k_sort_key(k) for k in ks])
+    merged = {name: (v[..., order] if name != "t_s" else v) for name, v in merged.items()}
+    return [ks[i] for i in order], merged, diagnoses
+
+
+def _k_sort_key(k: float) -> float:
+    return math.inf if math.isinf(k) else k
+
+
+def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
+    t0 = time.perf_counter()
+    test = scenario.twist
+    progress(f"twist {test.twist * 1e3:g} permille over {test.base_m:g} m -> rail raised {test.height_m * 1e3:.1f} mm under "
+             f"{', '.join(test.raised_wheels)}; {len(scenario.k_W_per_K)} k values, {test.duration_s:g} s simulated")
+    ks, rec, diagnoses = simulate_twist(scenario, progress)
+    Q = rec["wheel_load_N"]                       # (samples, 8, cases)
+    Q0 = static_wheel_loads(Q[0])                 # (8, cases)
+    dqq = wheel_unloading(Q, Q0)                  # (samples, 8, cases)
+    t = rec["t_s"]
+    rows = []
+    for j, k in enumerate(ks):
+        worst = np.unravel_index(np.argmax(dqq[:, :, j]), dqq[:, :, j].shape)
+        row = {"k_W_per_K": k, "dqq_max": float(dqq[:, :, j].max()), "dqq_max_wheel": WHEELS[worst[1]],
+               "t_dqq_max_s": float(t[worst[0]])}
+        row.update({f"dqq_max_{w}": float(dqq[:, i, j].max()) for i, w in enumerate(WHEELS)})
+        row.update({f"dqq_end_{w}": float(dqq[-1, i, j]) for i, w in enumerate(WHEELS)})
+        row["roll_carbody_end_rad"] = float(rec["roll_rad"][-1, j])
+        row["T_bellow_max_K"] = float(rec["bellow_T_K"][:, :, j].max())
+        row["T_bellow_min_K"] = float(rec["bellow_T_K"][:, :, j].min())
+        rows.append(row)
+        write_columns(out / "timeseries" / f"twist_k={k_label(k)}.csv", _timeseries(rec, dqq, j))
+    write_rows(out / "summary.csv", rows)
+    _plots(out, ks, rec, dqq, test)
+    diverged = "; ".join(diagnoses) or None
+    metrics = {"dqq_max": max(r["dqq_max"] for r in rows)} if rows else {}
+    write_run_json(out, scenario, time.perf_counter() - t0,
+                   {"twist_height_m": test.height_m, "twist_per_mille": test.twist * 1e3,
+                    "diverged": diverged, "metrics": metrics,
+                    "Q0_N": {w: float(Q0[i, 0]) for i, w in enumerate(WHEELS)}})
+    outcome = Outcome(scenario, [{c: r[c] for c in ("k_W_per_K", "dqq_max", "dqq_max_wheel", "t_dqq_max_s",
+                                                    "dqq_end_1L", "dqq_end_4R", "T_bellow_max_K")} for r in rows],
+                      metrics, diverged)
+    return outcome
+
+
+def _timeseries(rec, dqq, j) -> Dict[str, np.ndarray]:
+    cols = {"t_s": rec["t_s"]}
+    cols.update({f"Q_{w}_N": rec["wheel_load_N"][:, i, j] for i, w in enumerate(WHEELS)})
+    cols.update({f"dqq_{w}": dqq[:, i, j] for i, w in enumerate(WHEELS)})
+    for name, key, unit in (("z", "crushing_m", "m"), ("F_bellow", "bellow_force_N", "N"),
+                            ("p_bellow", "bellow_p_Pa", "Pa"), ("T_bellow", "bellow_T_K", "K")):
+        cols.update({f"{name}_{b}_{unit}": rec[key][:, i, j] for i, b in enumerate(BELLOWS)})
+    cols["roll_carbody_rad"] = rec["roll_rad"][:, j]
+    return cols
+
+
+def _plots(out: Path, ks, rec, dqq, test: TwistTest) -> None:
+    t = rec["t_s"]
+    Q = rec["wheel_load_N"]
+
+    def per_k(values, scale=1.0):
+        return [Curve(t, values[..., j] * scale, k_legend(k)) for j, k in enumerate(ks)]
+
+    wheels = ("1L", "1R", "4L", "4R")
+    save_panels(out / "fig8_wheel_loads.png",
+                [Panel(per_k(Q[:, WHEELS.index(w)], 1e-3), "time t [s]", f"wheel load Q_{w} [kN]", f"wheel {w}")
+                 for w in wheels], f"Vertical wheel-rail forces during the twist test, wheelsets 1 and 4 (paper Fig. 8); "
+                                   f"rail raised {test.height_m * 1e3:.0f} mm", ncols=2)
+    save_panels(out / "dqq.png",
+                [Panel(per_k(dqq[:, WHEELS.index(w)]), "time t [s]", f"ΔQ/Q0 of wheel {w} [-]", f"wheel {w}",
+                       hlines=[(DQQ_LIMIT, "EN 14363 limit 0.6")]) for w in wheels],
+                "Wheel unloading ΔQ/Q0 (positive: unloaded)", ncols=2)
+    save_panels(out / "bellows.png",
+                [Panel(per_k(rec["bellow_p_Pa"][:, i], 1e-5), "time t [s]", f"p_{b} [bar abs]", f"bellow {b}")
+                 for i, b in enumerate(BELLOWS)] +
+                [Panel(per_k(rec["bellow_T_K"][:, i]), "time t [s]", f"T_{b} [K]", f"bellow {b}")
+                 for i, b in enumerate(BELLOWS)], "Bellow pressures and temperatures", ncols=2)
