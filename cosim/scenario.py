@@ -165,8 +165,11 @@ class CarCircuit:
     differential_valve: Optional[DifferentialPressureValve]
     supply: Supply
     cross_pipe: Optional[Pipe]
+    explicit: Optional[Tuple[Tuple[str, object], ...]] = None
 
     def components(self) -> Dict[str, object]:
+        if self.explicit is not None:
+            return dict(self.explicit)
         return car_circuit(self.bellow, self.tank, self.pipe,
                            levelling=self.levelling_valve if self.valves else None,
                            differential=self.differential_valve if self.valves else None,
@@ -286,16 +289,12 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     return Scenario(**common, vehicle=vehicle, circuit=circuit, twist=twist, solver=solver, checks=checks)
 
 
-def _component(cls, data, file, path, **fixed):
-    return build(cls, data, file, path, **fixed)
-
-
 def _rig_circuit(data: Mapping, file) -> RigCircuit:
     check_keys(data, ("bellow", "tank", "pipe", "p0_Pa"), file, ["circuit"])
-    bellow = _component(Bellow, data.get("bellow"), file, ["circuit", "bellow"], p0_Pa=None, T0_K=None)
-    tank = None if ("tank" in data and data["tank"] is None) else _component(
+    bellow = build(Bellow, data.get("bellow"), file, ["circuit", "bellow"], p0_Pa=None, T0_K=None)
+    tank = None if ("tank" in data and data["tank"] is None) else build(
         Tank, data.get("tank"), file, ["circuit", "tank"], p0_Pa=None, T0_K=None)
-    pipe = _component(Pipe, data.get("pipe"), file, ["circuit", "pipe"], a="bellow", b="tank")
+    pipe = build(Pipe, data.get("pipe"), file, ["circuit", "pipe"], a="bellow", b="tank")
     p0 = coerce(require(data, "p0_Pa", file, ["circuit"]), float, file, ["circuit", "p0_Pa"])
     if not p0 > 0:
         raise ScenarioError(file, ["circuit", "p0_Pa"], f"absolute pressure must be > 0 Pa, got {p0}")
@@ -307,24 +306,52 @@ def _rig_circuit(data: Mapping, file) -> RigCircuit:
 LAYOUTS = ("four_point", "two_point")
 
 
+def _explicit_components(data: Mapping, file) -> Dict[str, object]:
+    """``circuit.components``: name -> {type: bellow|tank|supply|pipe|orifice|levelling_valve|...,
+    parameters...}; links name the nodes they join (``a``/``b``, ``bellow``, ``supply`` ...)."""
+    from pneumatics.circuit import COMPONENT_TYPES
+    comps = require(data, "components", file, ["circuit"], dict)
+    out = {}
+    for name, spec in comps.items():
+        path = ["circuit", "components", str(name)]
+        if not isinstance(spec, dict):
+            raise ScenarioError(file, path, f"expected a mapping with a 'type', got {type(spec).__name__}")
+        kind = require(spec, "type", file, path, str)
+        if kind not in COMPONENT_TYPES:
+            raise ScenarioError(file, path + ["type"], f"unknown component type {kind!r} "
+                                                       f"(expected one of {', '.join(sorted(COMPONENT_TYPES))})")
+        out[str(name)] = build(COMPONENT_TYPES[kind], {k: v for k, v in spec.items() if k != "type"}, file, path)
+    _compile_check(out, file, ["circuit", "components"], {})
+    missing = [b for b in BELLOWS if b not in out]
+    if missing:
+        raise ScenarioError(file, ["circuit", "components"], f"the car needs bellows named {', '.join(BELLOWS)}; "
+                                                             f"missing {', '.join(missing)}")
+    return out
+
+
 def _car_circuit(data: Mapping, file) -> CarCircuit:
+    if "components" in data:
+        check_keys(data, ("components",), file, ["circuit"])
+        explicit = _explicit_components(data, file)
+        return CarCircuit("explicit", Bellow(), None, Pipe("", ""), False, LevellingValve(""), None, Supply(), None,
+                          tuple(explicit.items()))
     keys = ("layout", "bellow", "tank", "pipe", "valves", "levelling_valve", "differential_valve", "supply", "cross_pipe")
     check_keys(data, keys, file, ["circuit"])
     layout = coerce(data.get("layout", "four_point"), str, file, ["circuit", "layout"])
     if layout not in LAYOUTS:
         raise ScenarioError(file, ["circuit", "layout"], f"expected one of {LAYOUTS}, got {layout!r}")
     P = ["circuit"]
-    bellow = _component(Bellow, data.get("bellow"), file, P + ["bellow"], p0_Pa=None, T0_K=None)
-    tank = None if ("tank" in data and data["tank"] is None) else _component(
+    bellow = build(Bellow, data.get("bellow"), file, P + ["bellow"], p0_Pa=None, T0_K=None)
+    tank = None if ("tank" in data and data["tank"] is None) else build(
         Tank, data.get("tank"), file, P + ["tank"], p0_Pa=None, T0_K=None)
-    pipe = _component(Pipe, data.get("pipe"), file, P + ["pipe"], a="", b="")
+    pipe = build(Pipe, data.get("pipe"), file, P + ["pipe"], a="", b="")
     valves = coerce(data.get("valves", False), bool, file, P + ["valves"])
-    lv = _component(LevellingValve, data.get("levelling_valve"), file, P + ["levelling_valve"],
+    lv = build(LevellingValve, data.get("levelling_valve"), file, P + ["levelling_valve"],
                     bellow="", supply="supply", sensed=())
-    dpv = None if ("differential_valve" in data and data["differential_valve"] is None) else _component(
+    dpv = None if ("differential_valve" in data and data["differential_valve"] is None) else build(
         DifferentialPressureValve, data.get("differential_valve"), file, P + ["differential_valve"], a="", b="")
-    supply = _component(Supply, data.get("supply"), file, P + ["supply"])
-    cross = _component(Pipe, data["cross_pipe"], file, P + ["cross_pipe"], a="", b="") if data.get("cross_pipe") else None
+    supply = build(Supply, data.get("supply"), file, P + ["supply"])
+    cross = build(Pipe, data["cross_pipe"], file, P + ["cross_pipe"], a="", b="") if data.get("cross_pipe") else None
     if layout == "two_point" and valves and cross is None:
         raise ScenarioError(file, P + ["cross_pipe"], "a two_point layout with valves needs a cross_pipe between the bellows of a bogie")
     spec = CarCircuit(layout, bellow, tank, pipe, valves, lv, dpv, supply, cross)

@@ -10,6 +10,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from pneumatics.circuit import Circuit
+from pneumatics.pipe import Pipe
 from vehicle.car import BELLOWS, WHEELS, MetroCar
 
 from .criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading
@@ -40,15 +41,22 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float]) -> CoSimul
     circuit = Circuit(components, k_W_per_K=np.asarray(k_values, dtype=float))
     if tuple(circuit.bellow_names) != BELLOWS:
         raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
-    F0 = cars[0].static_bellow_forces_N()
-    p_atm = circuit.atmosphere.p_Pa
-    p0: Dict[str, float] = {}
-    for b, F in zip(BELLOWS, F0):
-        p0[b] = p_atm + F / components[b].area_m2(0.0)       # eq. (4) solved for p at z = 0
-        if f"tank_{b}" in components:
-            p0[f"tank_{b}"] = p0[b]
-    x0 = circuit.initial_state(p0, n_cases=len(k_values))
+    x0 = circuit.initial_state(static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa),
+                               n_cases=len(k_values))
     return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling)
+
+
+def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:
+    """Bellow pressures that carry the static load, eq. (4) solved for p at z = 0; a chamber with no
+    initial pressure of its own that a pipe joins to a bellow (its auxiliary tank) starts at that
+    bellow's pressure, so the circuit starts at rest."""
+    p0 = {b: p_atm_Pa + F / components[b].area_m2(0.0) for b, F in zip(BELLOWS, F0_N)}
+    for c in components.values():
+        if isinstance(c, Pipe):
+            for bellow, other in ((c.a, c.b), (c.b, c.a)):
+                if bellow in p0 and other not in p0 and getattr(components.get(other), "p0_Pa", 0) is None:
+                    p0[other] = p0[bellow]
+    return p0
 
 
 def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], float, List[float]]:

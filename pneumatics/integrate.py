@@ -24,11 +24,12 @@ from .circuit import Circuit
 Motion = Callable[[float], Tuple[np.ndarray, np.ndarray]]
 
 
-def stable_step_s(circuit: Circuit, x: np.ndarray, h_max_s: float = 1e-3, courant: float = 0.5) -> float:
-    """A fixed RK4 step that resolves the thermal relaxation: h <= courant / max(k / (m c_v)).
+def stable_step_s(circuit: Circuit, x: np.ndarray, h_max_s: float = 1e-3, courant: float = 1.5) -> float:
+    """A fixed RK4 step that keeps the thermal relaxation stable: h <= courant / max(k / (m c_v)).
 
-    RK4's stability limit is |h lambda| < 2.78 on the real axis; ``courant`` = 0.5 also keeps its
-    truncation error on that mode below 0.03 % per step. ``h_max_s`` bounds it for the pipe mode.
+    RK4's stability limit is |h lambda| < 2.78 on the real axis. At ``courant`` = 1.5 a step damps
+    that mode by 0.27 instead of exp(-1.5) = 0.22: a fast transient decaying a little slower, with
+    the slow thermal state itself unaffected. ``h_max_s`` bounds the step for the pipe mode.
     """
     k = circuit._k_finite
     if not np.any(k > 0):

@@ -1,0 +1,147 @@
+"""Bad scenario input fails before any simulation, naming the file, the key path and what was expected."""
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import pytest
+import yaml
+
+from cosim import cli
+from cosim.scenario import load_scenario
+from cosim.schema import ScenarioError
+from helpers import SCENARIOS, short_twist, write_scenario
+
+RIG = yaml.safe_load((SCENARIOS / "rig_ramp.yaml").read_text())
+
+
+def rig(**changes):
+    data = copy.deepcopy(RIG)
+    for key, value in changes.items():
+        node = data
+        *parents, last = key.split(".")
+        for p in parents:
+            node = node[p]
+        if value is _DELETE:
+            del node[last]
+        else:
+            node[last] = value
+    return data
+
+
+_DELETE = object()
+
+
+def error_for(tmp_path, data) -> ScenarioError:
+    path = write_scenario(tmp_path, data)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert info.value.file == str(path)
+    return info.value
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in SCENARIOS.glob("*.yaml")))
+def test_shipped_scenarios_are_valid(name):
+    scenario = load_scenario(SCENARIOS / name)
+    assert scenario.k_W_per_K
+
+
+def test_missing_key(tmp_path):
+    err = error_for(tmp_path, rig(**{"circuit.p0_Pa": _DELETE}))
+    assert err.path == "circuit.p0_Pa" and "missing" in err.reason
+
+
+def test_wrong_type(tmp_path):
+    err = error_for(tmp_path, rig(**{"circuit.bellow.V0_m3": "twelve litres"}))
+    assert err.path == "circuit.bellow.V0_m3" and "expected a number" in err.reason
+
+
+def test_negative_volume(tmp_path):
+    err = error_for(tmp_path, rig(**{"circuit.tank.V_m3": -0.027}))
+    assert err.path == "circuit.tank.V_m3" and "> 0" in err.reason
+
+
+def test_negative_k(tmp_path):
+    err = error_for(tmp_path, rig(k_W_per_K=[0, -1]))
+    assert err.path.startswith("k_W_per_K") and ">= 0" in err.reason
+
+
+def test_unknown_key_lists_the_allowed_ones(tmp_path):
+    err = error_for(tmp_path, rig(**{"circuit.bellow.volume": 0.012}))
+    assert err.path == "circuit.bellow.volume" and "V0_m3" in err.reason
+
+
+def test_unknown_kind(tmp_path):
+    err = error_for(tmp_path, rig(kind="rig_teleport"))
+    assert err.path == "kind" and "rig_ramp" in err.reason
+
+
+def test_yaml_exponent_without_sign_is_read_as_a_number(tmp_path):
+    # PyYAML reads 4.0e5 as a string; the loader accepts the obvious intent.
+    path = tmp_path / "s.yaml"
+    path.write_text((SCENARIOS / "rig_ramp.yaml").read_text().replace("4.0e+5", "4.0e5"))
+    assert load_scenario(path).rig.p0_Pa == 4.0e5
+
+
+def _explicit_circuit():
+    comps = {}
+    for b in ("FL", "FR", "RL", "RR"):
+        comps[b] = {"type": "bellow"}
+        comps[f"tank_{b}"] = {"type": "tank", "V_m3": 0.027}
+        comps[f"pipe_{b}"] = {"type": "pipe", "a": b, "b": f"tank_{b}"}
+    return {"components": comps}
+
+
+def test_explicit_circuit_is_accepted(tmp_path):
+    scenario = load_scenario(write_scenario(tmp_path, short_twist(circuit=_explicit_circuit())))
+    assert set(scenario.circuit.components()) >= {"FL", "tank_RR", "pipe_RL"}
+
+
+def test_unknown_component_type(tmp_path):
+    circuit = _explicit_circuit()
+    circuit["components"]["valve_X"] = {"type": "flux_capacitor"}
+    err = error_for(tmp_path, short_twist(circuit=circuit))
+    assert err.path == "circuit.components.valve_X.type" and "pipe" in err.reason
+
+
+def test_connection_to_missing_component(tmp_path):
+    circuit = _explicit_circuit()
+    circuit["components"]["pipe_FL"]["b"] = "tank_XX"
+    err = error_for(tmp_path, short_twist(circuit=circuit))
+    assert err.path == "circuit.components.pipe_FL.b" and "tank_XX" in err.reason
+
+
+def test_unknown_wheel_and_bad_check(tmp_path):
+    err = error_for(tmp_path, short_twist(**{"twist.raised_wheels": ["1R", "9Z"]}))
+    assert err.path == "twist.raised_wheels[1]"
+    err = error_for(tmp_path, short_twist(checks=["dqq_max is small"]))
+    assert err.path == "checks[0]"
+    err = error_for(tmp_path, short_twist(checks=["roll_max <= 0.1"]))
+    assert "unknown metric" in err.reason
+
+
+def test_vehicle_parameter_error_names_the_parameter_file(tmp_path):
+    params = yaml.safe_load((SCENARIOS / "params" / "metro_car.yaml").read_text())
+    params["carbody_mass_kg"] = -17000
+    (tmp_path / "car.yaml").write_text(yaml.safe_dump(params))
+    path = write_scenario(tmp_path, short_twist(vehicle="car.yaml"))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert info.value.file.endswith("car.yaml") and info.value.path == "carbody_mass_kg"
+
+
+def test_cli_bad_input_exits_2_before_simulating(tmp_path, capsys):
+    path = write_scenario(tmp_path, rig(**{"circuit.tank.V_m3": -1.0}))
+    out = tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out)]) == cli.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert str(path) in err and "circuit.tank.V_m3" in err
+    assert not out.exists()          # nothing ran, nothing written
+
+
+def test_set_override_is_validated(tmp_path):
+    path = write_scenario(tmp_path, rig())
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path, overrides=["test.ramp_s=-1"])
+    assert info.value.path == "test.ramp_s"
+    assert load_scenario(path, overrides=["test.ramp_s=2"]).test.ramp_s == 2.0
