@@ -21,7 +21,6 @@ pneumatic cost per macro-step is paid once for all of them.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence
 

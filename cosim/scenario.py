@@ -13,13 +13,11 @@ Every error names the file, the key path and what was expected (:class:`Scenario
 """
 from __future__ import annotations
 
-import dataclasses
 import hashlib
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
 import yaml
 

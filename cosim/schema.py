@@ -12,7 +12,7 @@ import math
 import re
 import typing
 from pathlib import Path
-from typing import Any, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Mapping, Sequence, Tuple, Union
 
 #: Suffixes of quantities that must be strictly positive.
 POSITIVE_SUFFIXES = ("_m3", "_m2", "_kg", "_Pa", "_K", "_s")

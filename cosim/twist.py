@@ -3,18 +3,15 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, Optional
 
 import numpy as np
 
-from pneumatics.circuit import Circuit
-from pneumatics.pipe import Pipe
 from vehicle.car import BELLOWS, WHEELS, MetroCar
 
 from .criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading
-from .master import CoSimulation, Record
+from .car_runs import simulate
 from .plots import Curve, Panel, k_legend, save_panels
 from .results import Progress, k_label, write_columns, write_rows, write_run_json
 from .runner import Outcome
@@ -32,72 +29,14 @@ def rail_heights(test: TwistTest):
     return rail
 
 
-def build_cosimulation(scenario: Scenario, k_values: Sequence[float]) -> CoSimulation:
-    """Cars (one per k) in static equilibrium and the circuit with bellow pressures that carry them."""
-    settings = scenario.solver
-    cars = [MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=settings.mechanics_step_s)
-            for _ in k_values]
-    components = scenario.circuit.components()
-    circuit = Circuit(components, k_W_per_K=np.asarray(k_values, dtype=float))
-    if tuple(circuit.bellow_names) != BELLOWS:
-        raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
-    x0 = circuit.initial_state(static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa),
-                               n_cases=len(k_values))
-    return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling)
-
-
-def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:
-    """Bellow pressures that carry the static load, eq. (4) solved for p at z = 0; a chamber with no
-    initial pressure of its own that a pipe joins to a bellow (its auxiliary tank) starts at that
-    bellow's pressure, so the circuit starts at rest."""
-    p0 = {b: p_atm_Pa + F / components[b].area_m2(0.0) for b, F in zip(BELLOWS, F0_N)}
-    for c in components.values():
-        if isinstance(c, Pipe):
-            for bellow, other in ((c.a, c.b), (c.b, c.a)):
-                if bellow in p0 and other not in p0 and getattr(components.get(other), "p0_Pa", 0) is None:
-                    p0[other] = p0[bellow]
-    return p0
-
-
-def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], float, List[float]]:
-    scenario, k_values, show_progress = args
-    t0 = time.perf_counter()
-    cosim = build_cosimulation(scenario, k_values)
-    progress = Progress(f"{scenario.name} k={','.join(k_label(k) for k in k_values)}") if show_progress else None
-    record, diagnosis = cosim.run(scenario.twist.duration_s, scenario.solver.output_interval_s, progress)
-    return record.arrays(), diagnosis, time.perf_counter() - t0, list(k_values)
-
-
-def _chunks(k_values: Sequence[float], jobs: int) -> List[List[float]]:
-    jobs = max(1, min(jobs, len(k_values)))
-    return [list(k_values[i::jobs]) for i in range(jobs)]
+def make_car(scenario: Scenario) -> MetroCar:
+    """The car standing on rails that follow the twist (picklable factory for cosim.car_runs)."""
+    return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=scenario.solver.mechanics_step_s)
 
 
 def simulate_twist(scenario: Scenario, progress: Optional[Progress] = None):
-    """Run every k; returns (k values, merged record arrays (..., cases), diagnoses)."""
-    chunks = _chunks(scenario.k_W_per_K, scenario.solver.jobs)
-    tasks = [(scenario, chunk, progress is not None) for chunk in chunks]
-    if len(chunks) == 1:
-        results = [_run_chunk(tasks[0])]
-    else:
-        with ProcessPoolExecutor(len(chunks)) as pool:
-            results = list(pool.map(_run_chunk, tasks))
-    ks, arrays, diagnoses = [], [], []
-    for rec, diag, wall, chunk in results:
-        ks += chunk
-        arrays.append(rec)
-        if diag:
-            diagnoses.append(f"k = {','.join(k_label(k) for k in chunk)} W/K: {diag}")
-    n = min(len(a["t_s"]) for a in arrays)      # a diverged chunk stops early
-    merged = {name: np.concatenate([a[name][:n] for a in arrays], axis=-1) if name != "t_s" else arrays[0]["t_s"][:n]
-              for name in arrays[0]}
-    order = np.argsort([_k_sort_key(k) for k in ks])
-    merged = {name: (v[..., order] if name != "t_s" else v) for name, v in merged.items()}
-    return [ks[i] for i in order], merged, diagnoses
-
-
-def _k_sort_key(k: float) -> float:
-    return math.inf if math.isinf(k) else k
+    """Every k of the twist scenario: (k values, record arrays, diagnoses)."""
+    return simulate(scenario, make_car, scenario.twist.duration_s, scenario.name if progress else None)
 
 
 def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:

@@ -276,7 +276,9 @@ def test_open_circuit_mass_and_energy_balance(kind, k):
     from_atm = circuit.mass_from(sol.y, "atmosphere")
     # Air really moves both ways: supply delivers, the atmosphere receives (> 1 g each).
     assert from_supply[-1] > 1e-3 and from_atm[-1] < -1e-3
-    assert np.all(np.diff(from_supply) >= -1e-15)       # a 9 bar supply never receives air back
+    # A 9 bar supply never receives air back. The accumulator is integrated, so it may step back
+    # by the solver's local error where the valve closes (a kink): allow 10 x its atol (1e-10 kg).
+    assert np.all(np.diff(from_supply) >= -1e-9)
     # Mass balance: a linear invariant of the augmented state -> round-off level.
     assert np.max(np.abs(M - M[0] - from_supply - from_atm)) < 1e-12 * M[0]
     # Energy: U(t) - U(0) = work + heat + enthalpy from boundaries (solver accuracy, as above).

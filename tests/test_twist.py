@@ -9,7 +9,8 @@ import pytest
 from cosim import cli
 from cosim.criteria import static_wheel_loads, wheel_unloading
 from cosim.scenario import load_scenario
-from cosim.twist import build_cosimulation, simulate_twist
+from cosim.car_runs import build_cosimulation
+from cosim.twist import make_car, simulate_twist
 from helpers import short_twist, write_scenario
 from vehicle.car import WHEELS
 
@@ -20,7 +21,7 @@ def scenario(tmp_path, **changes):
 
 def test_starts_in_static_equilibrium(tmp_path):
     s = scenario(tmp_path)
-    cosim = build_cosimulation(s, [0.0])
+    cosim = build_cosimulation(s, [0.0], make_car)
     Q = cosim.cars[0].wheel_loads_N()
     p = s.vehicle
     weight = 9.81 * (p.carbody_mass_kg + 2 * p.bogie_mass_kg + 4 * p.wheelset_mass_kg)

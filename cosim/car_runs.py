@@ -1,0 +1,81 @@
+"""Running cars co-simulated with their circuit, one car per k value, k cases split over processes."""
+from __future__ import annotations
+
+from concurrent.futures import ProcessPoolExecutor
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from pneumatics.circuit import Circuit
+from pneumatics.pipe import Pipe
+from vehicle.car import BELLOWS
+
+from .master import CoSimulation
+from .results import Progress, k_label
+from .scenario import Scenario
+
+#: make_car(scenario) -> a car with the vehicle.car.MetroCar interface (module-level: picklable)
+CarFactory = Callable[[Scenario], object]
+
+
+def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: CarFactory) -> CoSimulation:
+    """Cars (one per k) in static equilibrium and the circuit with bellow pressures that carry them."""
+    settings = scenario.solver
+    cars = [make_car(scenario) for _ in k_values]
+    components = scenario.circuit.components()
+    circuit = Circuit(components, k_W_per_K=np.asarray(k_values, dtype=float))
+    if tuple(circuit.bellow_names) != BELLOWS:
+        raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
+    x0 = circuit.initial_state(static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa),
+                               n_cases=len(k_values))
+    return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling)
+
+
+def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:
+    """Bellow pressures that carry the static load, eq. (4) solved for p at z = 0; a chamber with no
+    initial pressure of its own that a pipe joins to a bellow (its auxiliary tank) starts at that
+    bellow's pressure, so the circuit starts at rest."""
+    p0 = {b: p_atm_Pa + F / components[b].area_m2(0.0) for b, F in zip(BELLOWS, F0_N)}
+    for c in components.values():
+        if isinstance(c, Pipe):
+            for bellow, other in ((c.a, c.b), (c.b, c.a)):
+                if bellow in p0 and other not in p0 and getattr(components.get(other), "p0_Pa", 0) is None:
+                    p0[other] = p0[bellow]
+    return p0
+
+
+def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]:
+    scenario, k_values, make_car, duration_s, label = args
+    cosim = build_cosimulation(scenario, k_values, make_car)
+    progress = Progress(f"{label} k={','.join(k_label(k) for k in k_values)}") if label else None
+    record, diagnosis = cosim.run(duration_s, scenario.solver.output_interval_s, progress)
+    return record.arrays(), diagnosis, list(k_values)
+
+
+def _chunks(k_values: Sequence[float], jobs: int) -> List[List[float]]:
+    jobs = max(1, min(jobs, len(k_values)))
+    return [list(k_values[i::jobs]) for i in range(jobs)]
+
+
+def simulate(scenario: Scenario, make_car: CarFactory, duration_s: float, label: Optional[str] = None):
+    """Run every k of ``scenario`` (``solver.jobs`` processes); returns (k values in ascending
+    order, record arrays (samples, ..., cases), divergence diagnoses). ``label``: show progress."""
+    chunks = _chunks(scenario.k_W_per_K, scenario.solver.jobs)
+    tasks = [(scenario, chunk, make_car, duration_s, label) for chunk in chunks]
+    if len(chunks) == 1:
+        results = [_run_chunk(tasks[0])]
+    else:
+        with ProcessPoolExecutor(len(chunks)) as pool:
+            results = list(pool.map(_run_chunk, tasks))
+    ks, arrays, diagnoses = [], [], []
+    for rec, diag, chunk in results:
+        ks += chunk
+        arrays.append(rec)
+        if diag:
+            diagnoses.append(f"k = {','.join(k_label(k) for k in chunk)} W/K: {diag}")
+    n = min(len(a["t_s"]) for a in arrays)      # a diverged chunk stops early
+    merged = {name: np.concatenate([a[name][:n] for a in arrays], axis=-1) if name != "t_s" else arrays[0]["t_s"][:n]
+              for name in arrays[0]}
+    order = np.argsort(ks)                        # inf sorts last
+    merged = {name: (v[..., order] if name != "t_s" else v) for name, v in merged.items()}
+    return [ks[i] for i in order], merged, diagnoses
