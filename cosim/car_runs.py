@@ -8,9 +8,10 @@ import numpy as np
 
 from pneumatics.circuit import Circuit
 from pneumatics.pipe import Pipe
-from vehicle.car import BELLOWS
+from vehicle.car import BELLOWS, WHEELS
 
 from .master import CoSimulation
+from .plots import Curve, Panel, k_legend
 from .results import Progress, k_label
 from .scenario import Scenario
 
@@ -79,3 +80,31 @@ def simulate(scenario: Scenario, make_car: CarFactory, duration_s: float, label:
     order = np.argsort(ks)                        # inf sorts last
     merged = {name: (v[..., order] if name != "t_s" else v) for name, v in merged.items()}
     return [ks[i] for i in order], merged, diagnoses
+
+
+def record_columns(rec: Dict[str, np.ndarray], j: int) -> Dict[str, np.ndarray]:
+    """Time-series columns of case ``j`` (headers carry units)."""
+    cols = {"t_s": rec["t_s"]}
+    cols.update({f"Q_{w}_N": rec["wheel_load_N"][:, i, j] for i, w in enumerate(WHEELS)})
+    for name, key, unit in (("z", "crushing_m", "m"), ("F_bellow", "bellow_force_N", "N"),
+                            ("p_bellow", "bellow_p_Pa", "Pa"), ("T_bellow", "bellow_T_K", "K")):
+        cols.update({f"{name}_{b}_{unit}": rec[key][:, i, j] for i, b in enumerate(BELLOWS)})
+    cols["roll_carbody_rad"] = rec["roll_rad"][:, j]
+    cols["air_from_supply_kg"] = rec["air_from_supply_kg"][:, j]
+    cols["air_to_atmosphere_kg"] = rec["air_to_atmosphere_kg"][:, j]
+    return cols
+
+
+def curves_per_k(t_s: np.ndarray, ks: Sequence[float], label: str = ""):
+    """per_k(values (samples, cases), scale) -> one Curve per k."""
+    def per_k(values, scale=1.0):
+        return [Curve(t_s, values[..., j] * scale, f"{label}{k_legend(k)}") for j, k in enumerate(ks)]
+    return per_k
+
+
+def bellow_panels(rec: Dict[str, np.ndarray], ks: Sequence[float]) -> List[Panel]:
+    per_k = curves_per_k(rec["t_s"], ks)
+    return ([Panel(per_k(rec["bellow_p_Pa"][:, i], 1e-5), "time t [s]", f"p_{b} [bar abs]", f"bellow {b}")
+             for i, b in enumerate(BELLOWS)] +
+            [Panel(per_k(rec["bellow_T_K"][:, i]), "time t [s]", f"T_{b} [K]", f"bellow {b}")
+             for i, b in enumerate(BELLOWS)])

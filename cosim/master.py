@@ -59,6 +59,8 @@ class Record:
     roll_rad: List[np.ndarray] = field(default_factory=list)          # (cases,)
     air_from_supply_kg: List[np.ndarray] = field(default_factory=list)  # (cases,)
     air_to_atmosphere_kg: List[np.ndarray] = field(default_factory=list)  # (cases,)
+    link_flow_kg_per_s: List[np.ndarray] = field(default_factory=list)  # (links, cases), a -> b
+    total_mass_kg: List[np.ndarray] = field(default_factory=list)       # (cases,) air in all chambers
 
     def arrays(self) -> Dict[str, np.ndarray]:
         return {name: np.asarray(values) for name, values in vars(self).items()}
@@ -117,6 +119,8 @@ class CoSimulation:
         zero = np.zeros(len(self.cars))
         record.air_from_supply_kg.append(c.mass_from(self.x, "supply") if self._supply else zero)
         record.air_to_atmosphere_kg.append(-c.mass_from(self.x, "atmosphere"))
+        record.link_flow_kg_per_s.append(out.link_flow_kg_per_s)
+        record.total_mass_kg.append(c.total_mass_kg(self.x))
 
     def run(self, t_end_s: float, output_interval_s: float,
             progress: Optional[Callable[[str, bool], None]] = None) -> tuple[Record, Optional[str]]:

@@ -29,6 +29,7 @@ class Panel:
     ylabel: str
     title: str = ""
     logx: bool = False
+    logy: bool = False
     hlines: List[Tuple[float, str]] = field(default_factory=list)
 
 
@@ -44,6 +45,8 @@ def save_panels(path: Path, panels: Sequence[Panel], suptitle: Optional[str] = N
                         va="bottom", color="k")
         if panel.logx:
             ax.set_xscale("log")
+        if panel.logy:
+            ax.set_yscale("log")
         ax.set_xlabel(panel.xlabel)
         ax.set_ylabel(panel.ylabel)
         if panel.title:

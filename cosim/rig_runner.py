@@ -144,9 +144,16 @@ def _stiffness(scenario: Scenario, out: Path, progress: Progress):
     save_panels(out / "fig6_dynamic_stiffness.png",
                 [Panel(curves, "frequency f [Hz]", "dynamic stiffness K_dyn [kN/m]",
                        f"{test.amplitude_m * 1e3:g} mm amplitude, periodic steady state (unstabilised cases omitted)",
-                       logx=True, hlines=ref)], "Dynamic stiffness of the bellow-tank subsystem (paper Fig. 6)")
+                       logx=True, logy=_spans_decades(curves), hlines=ref)],
+                "Dynamic stiffness of the bellow-tank subsystem (paper Fig. 6)")
     progress(f"sweep of {len(points)} cases took {wall:.1f} s")
     return rows
+
+
+def _spans_decades(curves) -> bool:
+    """Log axis when the values span more than a factor 10 (small k near resonance run away)."""
+    values = [v for c in curves for v in c.y if v > 0]
+    return bool(values) and max(values) > 10 * min(values)
 
 
 def _table2(scenario: Scenario, out: Path, progress: Progress):

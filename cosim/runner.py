@@ -55,5 +55,8 @@ def run_scenario(scenario: Scenario, out_dir: Path, progress: Progress) -> Outco
     if scenario.kind in RIG_KINDS:
         from .rig_runner import run_rig
         return Outcome(scenario, run_rig(scenario, out_dir, progress))
+    if scenario.kind == "curve_entry":
+        from .curve import run_curve
+        return run_curve(scenario, out_dir, progress)
     from .twist import run_twist
     return run_twist(scenario, out_dir, progress)

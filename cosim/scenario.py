@@ -32,7 +32,7 @@ from vehicle.params import VehicleParams
 from .schema import ScenarioError, build, check_keys, coerce, k_values, require
 
 RIG_KINDS = ("rig_ramp", "rig_sine", "rig_stiffness", "rig_table2")
-CAR_KINDS = ("twist",)
+CAR_KINDS = ("twist", "curve_entry")
 KINDS = RIG_KINDS + CAR_KINDS
 
 
@@ -133,6 +133,29 @@ class SolverSettings:
 COUPLINGS = ("linearised", "explicit")
 
 
+@dataclass(frozen=True)
+class CurveTest:
+    """Curve entry (paper §4.2, Fig. 9): straight, clothoid transition, circular arc, at constant
+    speed. The car starts at rest relative to the straight (rear wheelset at s = 0), so
+    ``straight_m`` must hold the whole car. ``valve_settings``: runs with the levelling and
+    differential valves disconnected (false) and connected (true)."""
+
+    speed_m_per_s: float = 10.0
+    straight_m: float = 20.0
+    transition_m: float = 15.0
+    radius_m: float = 100.0
+    arc_m: float = 300.0
+    cant_rad: float = 0.0
+    direction: int = 1
+    duration_s: float = 30.0
+    valve_settings: Tuple[bool, ...] = (False, True)
+
+    def track(self):
+        from vehicle.track import TrackGeometry
+        return TrackGeometry.curve_entry(self.straight_m, self.transition_m, self.radius_m, self.arc_m,
+                                         cant_rad=self.cant_rad, direction=self.direction)
+
+
 # ----------------------------------------------------------------------------------- circuits
 @dataclass(frozen=True)
 class RigCircuit:
@@ -189,7 +212,7 @@ class Check:
                 ">": value > self.limit}[self.op]
 
 
-CHECK_METRICS = {"twist": ("dqq_max",)}
+CHECK_METRICS = {"twist": ("dqq_max",), "curve_entry": ("roll_max_rad", "air_injected_kg")}
 _CHECK = re.compile(r"^\s*([A-Za-z_]\w*)\s*(<=|<|>=|>)\s*([-+]?[0-9.]+(?:[eE][-+]?\d+)?)\s*$")
 
 
@@ -208,6 +231,7 @@ class Scenario:
     vehicle: Optional[VehicleParams] = None
     circuit: Optional[CarCircuit] = None
     twist: Optional[TwistTest] = None
+    curve: Optional[CurveTest] = None
     solver: SolverSettings = SolverSettings()
     checks: Tuple[Check, ...] = ()
     raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
@@ -272,19 +296,49 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
             raise ScenarioError(path, ["test", "frequencies_Hz"], "frequencies must be > 0 Hz")
         return Scenario(**common, rig=rig, test=test)
 
-    check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", "twist", "solver", "checks"), path, [])
+    experiment = "twist" if kind == "twist" else "curve"
+    check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", experiment, "solver", "checks"),
+               path, [])
     vehicle = _vehicle(data.get("vehicle"), path)
     circuit = _car_circuit(require(data, "circuit", path, [], dict), path)
     solver = build(SolverSettings, data.get("solver"), path, ["solver"])
     if solver.coupling not in COUPLINGS:
         raise ScenarioError(path, ["solver", "coupling"], f"expected one of {COUPLINGS}, got {solver.coupling!r}")
-    twist = build(TwistTest, data.get("twist"), path, ["twist"])
+    if kind == "twist":
+        tests = {"twist": _twist(data.get("twist"), path)}
+    else:
+        tests = {"curve": _curve(data.get("curve"), vehicle, path)}
+    checks = _checks(data.get("checks", []), kind, path)
+    return Scenario(**common, vehicle=vehicle, circuit=circuit, solver=solver, checks=checks, **tests)
+
+
+def _twist(data, path) -> TwistTest:
+    twist = build(TwistTest, data, path, ["twist"])
     from vehicle.car import WHEELS
     for i, w in enumerate(twist.raised_wheels):
         if w not in WHEELS:
             raise ScenarioError(path, ["twist", f"raised_wheels[{i}]"], f"unknown wheel {w!r} (wheels: {', '.join(WHEELS)})")
-    checks = _checks(data.get("checks", []), kind, path)
-    return Scenario(**common, vehicle=vehicle, circuit=circuit, twist=twist, solver=solver, checks=checks)
+    return twist
+
+
+def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
+    curve = build(CurveTest, data, path, ["curve"])
+    if curve.direction not in (1, -1):
+        raise ScenarioError(path, ["curve", "direction"], f"expected 1 (left) or -1 (right), got {curve.direction}")
+    if not curve.speed_m_per_s > 0:
+        raise ScenarioError(path, ["curve", "speed_m_per_s"], f"must be > 0 m/s, got {curve.speed_m_per_s}")
+    for name in ("straight_m", "transition_m", "radius_m", "arc_m"):
+        if not getattr(curve, name) > 0:
+            raise ScenarioError(path, ["curve", name], f"must be > 0 m, got {getattr(curve, name)}")
+    car_length = vehicle.bogie_centre_distance_m + vehicle.wheelbase_m
+    if curve.straight_m < car_length:
+        raise ScenarioError(path, ["curve", "straight_m"], f"the straight must hold the whole car ({car_length:g} m "
+                                                           f"between the outer wheelsets), got {curve.straight_m:g} m")
+    on_track = (curve.straight_m + curve.transition_m + curve.arc_m - car_length) / curve.speed_m_per_s
+    if curve.duration_s > on_track:
+        raise ScenarioError(path, ["curve", "duration_s"], f"the front wheelset leaves the track at t = {on_track:.3g} s; "
+                                                           f"lengthen arc_m or shorten duration_s")
+    return curve
 
 
 def _rig_circuit(data: Mapping, file) -> RigCircuit:

@@ -4,15 +4,15 @@ from __future__ import annotations
 import math
 import time
 from pathlib import Path
-from typing import Dict, Optional
+from typing import Optional
 
 import numpy as np
 
-from vehicle.car import BELLOWS, WHEELS, MetroCar
+from vehicle.car import WHEELS, MetroCar
 
 from .criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading
-from .car_runs import simulate
-from .plots import Curve, Panel, k_legend, save_panels
+from .car_runs import bellow_panels, curves_per_k, record_columns, simulate
+from .plots import Panel, save_panels
 from .results import Progress, k_label, write_columns, write_rows, write_run_json
 from .runner import Outcome
 from .scenario import Scenario, TwistTest
@@ -60,7 +60,8 @@ def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
         row["T_bellow_max_K"] = float(rec["bellow_T_K"][:, :, j].max())
         row["T_bellow_min_K"] = float(rec["bellow_T_K"][:, :, j].min())
         rows.append(row)
-        write_columns(out / "timeseries" / f"twist_k={k_label(k)}.csv", _timeseries(rec, dqq, j))
+        write_columns(out / "timeseries" / f"twist_k={k_label(k)}.csv",
+                      {**record_columns(rec, j), **{f"dqq_{w}": dqq[:, i, j] for i, w in enumerate(WHEELS)}})
     write_rows(out / "summary.csv", rows)
     _plots(out, ks, rec, dqq, test)
     diverged = "; ".join(diagnoses) or None
@@ -75,24 +76,9 @@ def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
     return outcome
 
 
-def _timeseries(rec, dqq, j) -> Dict[str, np.ndarray]:
-    cols = {"t_s": rec["t_s"]}
-    cols.update({f"Q_{w}_N": rec["wheel_load_N"][:, i, j] for i, w in enumerate(WHEELS)})
-    cols.update({f"dqq_{w}": dqq[:, i, j] for i, w in enumerate(WHEELS)})
-    for name, key, unit in (("z", "crushing_m", "m"), ("F_bellow", "bellow_force_N", "N"),
-                            ("p_bellow", "bellow_p_Pa", "Pa"), ("T_bellow", "bellow_T_K", "K")):
-        cols.update({f"{name}_{b}_{unit}": rec[key][:, i, j] for i, b in enumerate(BELLOWS)})
-    cols["roll_carbody_rad"] = rec["roll_rad"][:, j]
-    return cols
-
-
 def _plots(out: Path, ks, rec, dqq, test: TwistTest) -> None:
-    t = rec["t_s"]
     Q = rec["wheel_load_N"]
-
-    def per_k(values, scale=1.0):
-        return [Curve(t, values[..., j] * scale, k_legend(k)) for j, k in enumerate(ks)]
-
+    per_k = curves_per_k(rec["t_s"], ks)
     wheels = ("1L", "1R", "4L", "4R")
     save_panels(out / "fig8_wheel_loads.png",
                 [Panel(per_k(Q[:, WHEELS.index(w)], 1e-3), "time t [s]", f"wheel load Q_{w} [kN]", f"wheel {w}")
@@ -102,8 +88,4 @@ def _plots(out: Path, ks, rec, dqq, test: TwistTest) -> None:
                 [Panel(per_k(dqq[:, WHEELS.index(w)]), "time t [s]", f"ΔQ/Q0 of wheel {w} [-]", f"wheel {w}",
                        hlines=[(DQQ_LIMIT, "EN 14363 limit 0.6")]) for w in wheels],
                 "Wheel unloading ΔQ/Q0 (positive: unloaded)", ncols=2)
-    save_panels(out / "bellows.png",
-                [Panel(per_k(rec["bellow_p_Pa"][:, i], 1e-5), "time t [s]", f"p_{b} [bar abs]", f"bellow {b}")
-                 for i, b in enumerate(BELLOWS)] +
-                [Panel(per_k(rec["bellow_T_K"][:, i]), "time t [s]", f"T_{b} [K]", f"bellow {b}")
-                 for i, b in enumerate(BELLOWS)], "Bellow pressures and temperatures", ncols=2)
+    save_panels(out / "bellows.png", bellow_panels(rec, ks), "Bellow pressures and temperatures", ncols=2)

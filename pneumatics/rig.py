@@ -140,7 +140,8 @@ def dynamic_stiffness_sweep(components: Dict[str, object], k_values: Iterable[fl
     return points
 
 
-def _solve_with_continuation(components, k, f, x_rest, amplitude_m, n_steps, tol, max_iter):
+def _solve_with_continuation(components, k, f, x_rest, amplitude_m, n_steps, tol, max_iter,
+                             max_continuation_rounds: int = 6):
     """Batched shooting for cases (k, f); failed cases are continued in k (see dynamic_stiffness_sweep)."""
     motion = sine_phase_motion(amplitude_m)
 
@@ -150,21 +151,28 @@ def _solve_with_continuation(components, k, f, x_rest, amplitude_m, n_steps, tol
                                               max_iter=max_iter)
 
     circuit, res = solve(k, np.repeat(x_rest[:, None], k.size, axis=1), 1.0 / f)
-    # Retry each failed case once, all together, from the periodic state of its nearest
-    # converged neighbour: the next larger k at the same frequency, else the nearest frequency
-    # at the same k.
-    failed = np.flatnonzero(~res.stabilised & (k > 0))
-    starts = []
-    for i in failed:
-        same_f = np.flatnonzero((f == f[i]) & (k > k[i]) & res.stabilised)
+    # Continuation for the failed cases, in batches: first from the periodic state of the next
+    # larger k at the same frequency, then, round after round, from the nearest frequency that
+    # converged at the same k (walking along the resonance curve as it heats up).
+    tried = set()
+
+    def donor_of(i, by_frequency):
+        if not by_frequency:
+            same_f = np.flatnonzero((f == f[i]) & (k > k[i]) & res.stabilised)
+            return same_f[np.argmin(k[same_f])] if same_f.size else None
         same_k = np.flatnonzero((k == k[i]) & res.stabilised)
-        donor = same_f[np.argmin(k[same_f])] if same_f.size else (
-            same_k[np.argmin(np.abs(np.log(f[same_k] / f[i])))] if same_k.size else None)
-        starts.append(None if donor is None else res.x0[:, donor])
-    retry = np.array([i for i, s in zip(failed, starts) if s is not None], dtype=int)
-    if retry.size:
-        x_retry = np.stack([s for s in starts if s is not None], axis=1)
-        _, again = solve(k[retry], x_retry, 1.0 / f[retry])
+        return same_k[np.argmin(np.abs(np.log(f[same_k] / f[i])))] if same_k.size else None
+
+    for round_ in range(max_continuation_rounds):
+        pairs = [(i, donor_of(i, round_ > 0)) for i in np.flatnonzero(~res.stabilised & (k > 0))]
+        pairs = [(i, d) for i, d in pairs if d is not None and (i, d) not in tried]
+        if not pairs:
+            if round_ > 0:
+                break
+            continue
+        tried.update(pairs)
+        retry = np.array([i for i, _ in pairs], dtype=int)
+        _, again = solve(k[retry], res.x0[:, [d for _, d in pairs]], 1.0 / f[retry])
         better = again.stabilised
         for name in ("x0", "residual", "floquet_max", "converged"):
             getattr(res, name)[..., retry[better]] = getattr(again, name)[..., better]

@@ -1,0 +1,102 @@
+"""Curve entry (paper §4.2, Fig. 9, Table 4): carbody roll and air consumption across k, with the
+levelling and differential pressure valves disconnected and connected."""
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+
+from pneumatics.circuit import Circuit
+from vehicle.car import BELLOWS, MetroCar
+
+from .car_runs import bellow_panels, curves_per_k, record_columns, simulate
+from .plots import Panel, save_panels
+from .results import Progress, k_label, write_columns, write_rows, write_run_json
+from .runner import Outcome
+from .scenario import Scenario
+
+#: components whose link flows are written to the time series
+VALVE_PREFIXES = ("lv_", "dpv_")
+
+
+def make_car(scenario: Scenario) -> MetroCar:
+    """The car running along the curve-entry track (picklable factory for cosim.car_runs)."""
+    return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, track=scenario.curve.track(),
+                    speed_m_per_s=scenario.curve.speed_m_per_s)
+
+
+def with_valves(scenario: Scenario, valves: bool) -> Scenario:
+    return dataclasses.replace(scenario, circuit=dataclasses.replace(scenario.circuit, valves=valves))
+
+
+def simulate_curve(scenario: Scenario, valves: bool, progress: bool = False):
+    """Every k with the valves connected or not: (k values, record arrays, diagnoses, link names)."""
+    variant = with_valves(scenario, valves)
+    label = f"{scenario.name} valves {'on' if valves else 'off'}" if progress else None
+    ks, rec, diagnoses = simulate(variant, make_car, scenario.curve.duration_s, label)
+    return ks, rec, diagnoses, Circuit(variant.circuit.components()).link_names
+
+
+def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
+    t0 = time.perf_counter()
+    curve = scenario.curve
+    progress(f"curve entry at {curve.speed_m_per_s:g} m/s: {curve.straight_m:g} m straight, {curve.transition_m:g} m "
+             f"transition, R = {curve.radius_m:g} m; {len(scenario.k_W_per_K)} k values x valves {curve.valve_settings}")
+    rows, runs, diagnoses = [], {}, []
+    for valves in curve.valve_settings:
+        ks, rec, diag, links = simulate_curve(scenario, valves, progress=True)
+        runs[valves] = (ks, rec)
+        diagnoses += [f"valves {'on' if valves else 'off'}: {d}" for d in diag]
+        tag = "on" if valves else "off"
+        for j, k in enumerate(ks):
+            rows.append(_summary_row(valves, k, rec, j))
+            cols = record_columns(rec, j)
+            cols.update({f"q_{name}_kg_per_s": rec["link_flow_kg_per_s"][:, i, j]
+                         for i, name in enumerate(links) if name.startswith(VALVE_PREFIXES)})
+            write_columns(out / "timeseries" / f"curve_valves={tag}_k={k_label(k)}.csv", cols)
+    write_rows(out / "summary.csv", rows)
+    _plots(out, runs)
+    diverged = "; ".join(diagnoses) or None
+    metrics = {"roll_max_rad": max(r["roll_max_rad"] for r in rows),
+               "air_injected_kg": max(r["air_injected_kg"] for r in rows)} if rows else {}
+    write_run_json(out, scenario, time.perf_counter() - t0, {"diverged": diverged, "metrics": metrics})
+    shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_end_rad", "air_injected_kg", "air_exhausted_kg")
+    return Outcome(scenario, [{c: r[c] for c in shown} for r in rows], metrics, diverged)
+
+
+def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int) -> Dict[str, object]:
+    roll = rec["roll_rad"][:, j]
+    row = {"valves": valves, "k_W_per_K": k, "roll_max_rad": float(np.abs(roll).max()), "roll_end_rad": float(roll[-1]),
+           "air_injected_kg": float(rec["air_from_supply_kg"][-1, j]),
+           "air_exhausted_kg": float(rec["air_to_atmosphere_kg"][-1, j]) + 0.0}  # no "-0"
+    row.update({f"z_end_{b}_m": float(rec["crushing_m"][-1, i, j]) for i, b in enumerate(BELLOWS)})
+    row["T_bellow_min_K"] = float(rec["bellow_T_K"][:, :, j].min())
+    row["T_bellow_max_K"] = float(rec["bellow_T_K"][:, :, j].max())
+    # closes to the integrator's round-off: air in the chambers changes only by what crosses the boundary
+    row["mass_balance_error_kg"] = float(rec["total_mass_kg"][-1, j] - rec["total_mass_kg"][0, j]
+                                         - rec["air_from_supply_kg"][-1, j] + rec["air_to_atmosphere_kg"][-1, j])
+    return row
+
+
+def _plots(out: Path, runs) -> None:
+    panels: List[Panel] = []
+    for valves, (ks, rec) in runs.items():
+        per_k = curves_per_k(rec["t_s"], ks)
+        panels.append(Panel(per_k(rec["roll_rad"], 1e3), "time t [s]", "carbody roll [mrad]",
+                            f"valves {'connected' if valves else 'disconnected'}"))
+    save_panels(out / "fig9_roll.png", panels, "Carbody roll entering a curve (paper Fig. 9)", ncols=len(panels))
+    for valves, (ks, rec) in runs.items():
+        tag = "on" if valves else "off"
+        per_k = curves_per_k(rec["t_s"], ks)
+        heights = [Panel(per_k(rec["crushing_m"][:, i], 1e3), "time t [s]", f"crushing z_{b} [mm]", f"bellow {b}")
+                   for i, b in enumerate(BELLOWS)]
+        save_panels(out / f"bellows_valves={tag}.png", heights + bellow_panels(rec, ks),
+                    f"Bellow crushing (+ compression), pressure and temperature, valves {tag}", ncols=2)
+        if valves:
+            save_panels(out / "air_consumption.png",
+                        [Panel(per_k(rec["air_from_supply_kg"], 1e3), "time t [s]", "air injected from the supply [g]"),
+                         Panel(per_k(rec["air_to_atmosphere_kg"], 1e3), "time t [s]", "air exhausted to the atmosphere [g]")],
+                        "Air consumption of the levelling valves (paper Table 4)", ncols=2)
