@@ -30,7 +30,8 @@ from typing import Mapping, Optional, Sequence
 import numpy as np
 
 from .boundary import Atmosphere, Supply
-from .chamber import Bellow, Tank, bellow_force_N, bellow_stiffness_N_per_m
+from .chamber import (Bellow, Tank, bellow_force_N, bellow_stiffness_N_per_m, heat_flow_into_W,
+                      isothermal_heat_flow_W, temperature_rate_K_per_s)
 from .gas import AIR, Gas
 from .orifice import Orifice, orifice_flow_kg_per_s
 from .pipe import Pipe, pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
@@ -129,6 +130,15 @@ class CircuitOutputs:
     V_m3: np.ndarray
     link_flow_kg_per_s: np.ndarray
     bellow_force_N: np.ndarray
+
+
+def _table_groups(tables):
+    """[(rows, x, y)]: the indices of the components that share each distinct (x, y) table, so that
+    one interpolation serves them all."""
+    groups = {}
+    for i, (x, y) in enumerate(tables):
+        groups.setdefault((tuple(x), tuple(y)), []).append(i)
+    return [(np.array(rows), np.array(x, float), np.array(y, float)) for (x, y), rows in groups.items()]
 
 
 def _column(values) -> np.ndarray:
@@ -271,6 +281,9 @@ class Circuit:
         # links whose flow is an ISO 6358 orifice law: fixed orifices, then valve sides
         self._orifice_links = np.r_[np.arange(self._sl_or.start, self._sl_or.stop),
                                     np.arange(self._sl_valve.start, self._sl_valve.stop)].astype(int)
+        self._pipe_a, self._pipe_b = self._a[self._sl_pipe], self._b[self._sl_pipe]
+        lay = self.layout
+        self._s_m, self._s_T, self._s_q, self._s_through = lay.m, lay.T, lay.q, lay.mass_through
         self._pipe_L = _column([comps[n].length_m for n in pipes])
         self._pipe_A = _column([comps[n].area_m2 for n in pipes])
         self._pipe_K = _column([comps[n].loss_coefficient for n in pipes])
@@ -282,6 +295,9 @@ class Circuit:
         self.valve_names = valves
         self._b_crit = _column([comps[n].b_critical for n in orifices] +
                                [comps[n].b_critical for n in valves] * 2)
+        self._supply_tables = _table_groups([(v.supply_lever_m, v.supply_C_m3_per_sPa) for v in self._valves])
+        self._exhaust_tables = _table_groups([(v.exhaust_lever_m, v.exhaust_C_m3_per_sPa) for v in self._valves])
+        self._dpv_tables = _table_groups([(v.dp_Pa, v.q_kg_per_s) for v in self._dpv])
         self._lever = np.zeros((n_v, len(self.bellow_names)))
         for i, n in enumerate(valves):
             sensed = comps[n].sensed_bellows
@@ -354,8 +370,8 @@ class Circuit:
 
     def _evaluate(self, x2: np.ndarray, z2: np.ndarray):
         """Pressures, volumes and link flows for a 2-D state (states x cases) and crushing (bellows x cases)."""
-        lay, gas = self.layout, self.gas
-        m, T = x2[lay.m], x2[lay.T]
+        gas = self.gas
+        m, T = x2[self._s_m], x2[self._s_T]
         V = self._V0 - self._Ez @ z2
         p = m * gas.R_J_per_kgK * T / V
         n_cases = x2.shape[1]
@@ -364,20 +380,22 @@ class Circuit:
         rho_n = p_n / (gas.R_J_per_kgK * T_n)
         a, b = self._a, self._b
         w = np.empty((len(a), n_cases))
-        w[self._sl_pipe] = x2[lay.q]
+        w[self._sl_pipe] = x2[self._s_q]
         qs = self._sl_qs
         if qs.stop > qs.start:
             rho = 0.5 * (rho_n[a[qs]] + rho_n[b[qs]])
             w[qs] = pipe_flow_quasi_steady_kg_per_s(p_n[a[qs]], p_n[b[qs]], rho, self._qs_A, self._qs_K)
-        for j, v in zip(range(self._sl_dpv.start, self._sl_dpv.stop), self._dpv):
-            w[j] = differential_valve_flow_kg_per_s(p_n[a[j]], p_n[b[j]], v.dp_Pa, v.q_kg_per_s)
+        for rows, xp, fp in self._dpv_tables:
+            j = self._sl_dpv.start + rows
+            w[j] = differential_valve_flow_kg_per_s(p_n[a[j]], p_n[b[j]], xp, fp)
         C = [C_or]
         if self._valves:
             lever = self._lever @ z2
-            C.append(np.array([lever_conductance(lever[i], v.supply_lever_m, v.supply_C_m3_per_sPa)
-                               for i, v in enumerate(self._valves)]))
-            C.append(np.array([lever_conductance(-lever[i], v.exhaust_lever_m, v.exhaust_C_m3_per_sPa)
-                               for i, v in enumerate(self._valves)]))
+            for tables, sign in ((self._supply_tables, 1.0), (self._exhaust_tables, -1.0)):
+                C_side = np.empty((len(self._valves), n_cases))
+                for rows, xp, fp in tables:
+                    C_side[rows] = lever_conductance(sign * lever[rows], xp, fp)
+                C.append(C_side)
         C = np.concatenate(C)
         if C.size:
             ia, ib = a[self._orifice_links], b[self._orifice_links]
@@ -386,32 +404,33 @@ class Circuit:
 
     def derivatives(self, x, z_m, zdot_m_per_s) -> np.ndarray:
         """d(state)/dt for state ``x`` (size,) or (size, cases) and bellow crushing and rate."""
-        x2 = x.reshape(self.layout.size, -1)
-        z2 = np.asarray(z_m, float).reshape(len(self.bellow_names), -1)
-        zdot2 = np.asarray(zdot_m_per_s, float).reshape(len(self.bellow_names), -1)
-        gas, lay = self.gas, self.layout
-        cv, cp = gas.cv_J_per_kgK, gas.cp_J_per_kgK
+        lay = self.layout
+        x2 = x.reshape(lay.size, -1)
+        z2 = np.reshape(z_m, (len(self.bellow_names), -1))
+        zdot2 = np.reshape(zdot_m_per_s, (len(self.bellow_names), -1))
+        cv = self.gas.cv_J_per_kgK
         m, T, V, p, p_n, T_n, rho_n, w = self._evaluate(x2, z2)
         a, b = self._a, self._b
         Vdot = -self._Ez @ zdot2
-        h_up = cp * np.where(w >= 0.0, T_n[a], T_n[b])
-        Hw = w * h_up
-        mdot = self._incidence @ w                                      # eq. (1)
+        Hw = w * (self.gas.cp_J_per_kgK * np.where(w >= 0.0, T_n[a], T_n[b]))  # upstream total enthalpy
+        mdot = self._incidence @ w                                                # eq. (1)
         Hdot = self._incidence @ Hw
-        pVdot = p * Vdot
-        Qdot = self._k_finite * (self.atmosphere.T_K - T)              # eq. (8), physical sign
+        Qdot = heat_flow_into_W(self._k_finite, T, self.atmosphere.T_K)          # eq. (8), physical sign
         if self._any_isothermal:
-            Q_iso = cv * T * mdot - Hdot + pVdot                        # eq. (2) with dT/dt = 0
-            Qdot = np.where(self._isothermal, Q_iso, Qdot)
-        dT = (Hdot - cv * T * mdot + Qdot - pVdot) / (m * cv)           # eq. (2)
+            Qdot = np.where(self._isothermal, isothermal_heat_flow_W(T, p, mdot, Hdot, Vdot, cv), Qdot)
+        dT = temperature_rate_K_per_s(m, T, p, mdot, Hdot, Qdot, Vdot, cv)       # eq. (2)
         if self._any_isothermal:
             dT = np.where(self._isothermal, 0.0, dT)
-        pipes = self._sl_pipe
-        rho_pipe = 0.5 * (rho_n[a[pipes]] + rho_n[b[pipes]])
-        dq = pipe_flow_rate_kg_per_s2(x2[lay.q], p_n[a[pipes]], p_n[b[pipes]], rho_pipe,
-                                      self._pipe_L, self._pipe_A, self._pipe_K)  # eq. (5)
-        dx = np.concatenate([mdot, dT, dq, w, Qdot.sum(axis=0, keepdims=True),
-                             -pVdot.sum(axis=0, keepdims=True), (self._boundary_sign @ Hw)[None]])
+        dx = np.empty_like(x2)
+        dx[self._s_m] = mdot
+        dx[self._s_T] = dT
+        pa, pb = self._pipe_a, self._pipe_b
+        dx[self._s_q] = pipe_flow_rate_kg_per_s2(x2[self._s_q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
+                                                 self._pipe_L, self._pipe_A, self._pipe_K)  # eq. (5)
+        dx[self._s_through] = w
+        dx[lay.heat_in] = Qdot.sum(axis=0)
+        dx[lay.work_in] = -(p * Vdot).sum(axis=0)
+        dx[lay.enthalpy_in] = self._boundary_sign @ Hw
         return dx.reshape(x.shape)
 
     def outputs(self, x, z_m) -> CircuitOutputs:
