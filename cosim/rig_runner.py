@@ -120,6 +120,15 @@ def _stiffness(scenario: Scenario, out: Path, progress: Progress):
                      "stabilised": p.stabilised, "periodicity_residual": p.residual,
                      "floquet_max": p.floquet_max, "cycles_to_settle": p.cycles_to_settle,
                      "pipe_velocity_max_m_per_s": p.pipe_velocity_max_m_per_s if p.stabilised else math.nan})
+    loops = [p for p in points if p.stabilised]
+    if loops:
+        write_columns(out / "timeseries" / "stiffness_loops.csv", {
+            "k_W_per_K": np.concatenate([np.full(p.loop_phase.size, p.k_W_per_K) for p in loops]),
+            "frequency_Hz": np.concatenate([np.full(p.loop_phase.size, p.frequency_Hz) for p in loops]),
+            "phase": np.concatenate([p.loop_phase for p in loops]),
+            "z_m": np.concatenate([test.amplitude_m * np.sin(2 * np.pi * p.loop_phase) for p in loops]),
+            "F_bellow_N": np.concatenate([p.loop_F_N for p in loops]),
+            "T_bellow_K": np.concatenate([p.loop_T_K for p in loops])})
     fast = [p for p in points if p.stabilised and p.pipe_velocity_max_m_per_s > MACH_WARNING * sound]
     if fast:
         worst = max(fast, key=lambda p: p.pipe_velocity_max_m_per_s)

@@ -88,6 +88,9 @@ class StiffnessPoint:
     floquet_max: float            # largest Floquet multiplier modulus (< 1: the orbit attracts)
     cycles_to_settle: float       # cycles for a disturbance to decay by 1e3 (from floquet_max)
     pipe_velocity_max_m_per_s: float
+    loop_phase: np.ndarray        # the periodic orbit, decimated: phase in [0, 1)
+    loop_F_N: np.ndarray          # bellow force along it
+    loop_T_K: np.ndarray          # bellow temperature along it
 
 
 def sweep_step_counts(frequencies_Hz: np.ndarray, dt_max_s: float, n_min: int) -> np.ndarray:
@@ -192,6 +195,8 @@ def _stiffness_points(circuit: Circuit, res, f: np.ndarray, k: float, amplitude_
 
     one_period(circuit, res.x0, 1.0 / f, motion, n_steps, observe)
     F, T, q = np.array(forces), np.array(temps), np.array(flows)
+    phase = np.arange(1, n_steps + 1) / n_steps
+    keep = np.unique(np.linspace(0, n_steps - 1, 64).astype(int))     # 64 points per loop for the record
     v_max = np.zeros(f.size)
     if PIPE in circuit.components:
         pipe = circuit.components[PIPE]
@@ -203,7 +208,8 @@ def _stiffness_points(circuit: Circuit, res, f: np.ndarray, k: float, amplitude_
         settle = math.log(1e-3) / math.log(fl) if 0.0 < fl < 1.0 else (0.0 if fl == 0.0 else math.inf)
         out.append(StiffnessPoint(float(np.broadcast_to(k, f.shape)[i]), float(f[i]), float((F[:, i].max() - F[:, i].min()) / (2 * amplitude_m)),
                                   float(F[:, i].min()), float(F[:, i].max()), float(T[:, i].mean()), float(T[:, i].max()),
-                                  bool(res.stabilised[i]), float(res.residual[i]), float(fl), settle, float(v_max[i])))
+                                  bool(res.stabilised[i]), float(res.residual[i]), float(fl), settle, float(v_max[i]),
+                                  phase[keep], F[keep, i], T[keep, i]))
     return out
 
 
