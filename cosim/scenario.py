@@ -70,7 +70,7 @@ class StiffnessTest:
 class QuasiStaticTest:
     """Table 2: slope of a slow small ramp."""
 
-    amplitude_m: float = 1e-3
+    amplitude_m: float = 1e-4
     ramp_s: float = 20.0
 
 

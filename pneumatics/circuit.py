@@ -402,12 +402,16 @@ class Circuit:
             w[self._orifice_links] = orifice_flow_kg_per_s(C, self._b_crit, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
         return m, T, V, p, p_n, T_n, rho_n, w
 
+    def _per_bellow(self, values, x2: np.ndarray) -> np.ndarray:
+        """A bellow input as (bellows, cases); a circuit without bellows takes an empty array."""
+        nb = len(self.bellow_names)
+        return np.reshape(values, (nb, -1)) if nb else np.zeros((0, x2.shape[1]))
+
     def derivatives(self, x, z_m, zdot_m_per_s) -> np.ndarray:
         """d(state)/dt for state ``x`` (size,) or (size, cases) and bellow crushing and rate."""
         lay = self.layout
         x2 = x.reshape(lay.size, -1)
-        z2 = np.reshape(z_m, (len(self.bellow_names), -1))
-        zdot2 = np.reshape(zdot_m_per_s, (len(self.bellow_names), -1))
+        z2, zdot2 = self._per_bellow(z_m, x2), self._per_bellow(zdot_m_per_s, x2)
         cv = self.gas.cv_J_per_kgK
         m, T, V, p, p_n, T_n, rho_n, w = self._evaluate(x2, z2)
         a, b = self._a, self._b
@@ -436,7 +440,7 @@ class Circuit:
     def outputs(self, x, z_m) -> CircuitOutputs:
         """Pressures, temperatures, masses, volumes, link flows and bellow forces (eq. 4)."""
         x2 = x.reshape(self.layout.size, -1)
-        z2 = np.asarray(z_m, float).reshape(len(self.bellow_names), -1)
+        z2 = self._per_bellow(z_m, x2)
         m, T, V, p, _, _, _, w = self._evaluate(x2, z2)
         F = self.bellow_forces_N(x2, z2)
         squeeze = (lambda v: v[:, 0]) if x.ndim == 1 else (lambda v: v)
@@ -451,7 +455,8 @@ class Circuit:
     def bellow_forces_N(self, x, z_m) -> np.ndarray:
         """Eq. (4) for every bellow; shapes follow ``z_m`` (bellows[, cases])."""
         z = np.asarray(z_m, float)
-        x2, z2 = x.reshape(self.layout.size, -1), z.reshape(len(self.bellow_names), -1)
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z, x2)
         F = bellow_force_N(self._A0 + self._dAdz * z2, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
         return F.reshape(z.shape)
 
@@ -459,7 +464,8 @@ class Circuit:
         """Instantaneous dF/dz of each bellow (air in the pipe cannot move instantly): adiabatic,
         or isothermal when k = inf. The co-simulation master uses it to linearise the force over a step."""
         z = np.asarray(z_m, float)
-        x2, z2 = x.reshape(self.layout.size, -1), z.reshape(len(self.bellow_names), -1)
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z, x2)
         p = self.bellow_pressures_Pa(x2, z2)
         n = np.where(self._isothermal, 1.0, self.gas.gamma)
         K = np.array([bellow_stiffness_N_per_m(self.components[name], z2[j], p[j], self.atmosphere.p_Pa, n)
