@@ -72,7 +72,7 @@ def _run(args) -> int:
         overrides.append(f"solver.jobs={args.jobs}")
     scenario = load_scenario(args.scenario, overrides, args.k)
     out = args.out or Path("results") / scenario.name
-    progress = Progress(scenario.name, stream=open("/dev/null", "w") if args.quiet else None)
+    progress = Progress(scenario.name, quiet=args.quiet)
     outcome = run_scenario(scenario, out, progress)
     print(outcome.report())
     print(f"results in {out}/")

@@ -47,7 +47,7 @@ def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
              f"transition, R = {curve.radius_m:g} m; {len(scenario.k_W_per_K)} k values x valves {curve.valve_settings}")
     rows, runs, diagnoses = [], {}, []
     for valves in curve.valve_settings:
-        ks, rec, diag, links = simulate_curve(scenario, valves, progress=True)
+        ks, rec, diag, links = simulate_curve(scenario, valves, progress=not progress.quiet)
         runs[valves] = (ks, rec)
         diagnoses += [f"valves {'on' if valves else 'off'}: {d}" for d in diag]
         tag = "on" if valves else "off"

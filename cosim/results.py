@@ -95,13 +95,16 @@ def _jsonable(v):
 class Progress:
     """Progress lines on stderr with elapsed wall time (only when a run takes more than a moment)."""
 
-    def __init__(self, label: str, stream=None, min_interval_s: float = 2.0):
+    def __init__(self, label: str, stream=None, min_interval_s: float = 2.0, quiet: bool = False):
         self.label, self.stream, self.min_interval_s = label, stream or sys.stderr, min_interval_s
+        self.quiet = quiet
         self.t0 = time.perf_counter()
         self._last = -math.inf
 
     def __call__(self, message: str, force: bool = True) -> None:
         now = time.perf_counter()
+        if self.quiet:
+            return
         if force or now - self._last >= self.min_interval_s:
             self._last = now
             print(f"[{self.label} {now - self.t0:6.1f} s] {message}", file=self.stream, flush=True)

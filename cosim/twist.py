@@ -36,7 +36,8 @@ def make_car(scenario: Scenario) -> MetroCar:
 
 def simulate_twist(scenario: Scenario, progress: Optional[Progress] = None):
     """Every k of the twist scenario: (k values, record arrays, diagnoses)."""
-    return simulate(scenario, make_car, scenario.twist.duration_s, scenario.name if progress else None)
+    return simulate(scenario, make_car, scenario.twist.duration_s,
+                    scenario.name if progress is not None and not progress.quiet else None)
 
 
 def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
