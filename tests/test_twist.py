@@ -96,3 +96,8 @@ def test_check_exit_codes(tmp_path, capsys):
     assert (out / "summary.csv").exists() and (out / "run.json").exists() and (out / "fig8_wheel_loads.png").exists()
     header = (out / "summary.csv").read_text().splitlines()[0].split(",")
     assert {"k_W_per_K", "dqq_max", "dqq_max_wheel", "dqq_max_1L", "dqq_end_4R"} <= set(header)
+    # compare overlays the two runs
+    assert cli.main(["compare", str(out), str(tmp_path / "f"), "--out", str(tmp_path / "cmp")]) == cli.EXIT_OK
+    assert (tmp_path / "cmp" / "compare_Q.png").exists() and (tmp_path / "cmp" / "compare_dqq.png").exists()
+    # a folder that is not a run is bad input
+    assert cli.main(["compare", str(tmp_path), "--out", str(tmp_path / "cmp2")]) == cli.EXIT_BAD_INPUT
