@@ -404,8 +404,8 @@ def _car_circuit(data: Mapping, file) -> CarCircuit:
         DifferentialPressureValve, data.get("differential_valve"), file, P + ["differential_valve"], a="", b="")
     supply = build(Supply, data.get("supply"), file, P + ["supply"])
     cross = build(Pipe, data["cross_pipe"], file, P + ["cross_pipe"], a="", b="") if data.get("cross_pipe") else None
-    if layout == "two_point" and valves and cross is None:
-        raise ScenarioError(file, P + ["cross_pipe"], "a two_point layout with valves needs a cross_pipe between the bellows of a bogie")
+    if layout == "two_point" and cross is None:
+        raise ScenarioError(file, P + ["cross_pipe"], "a two_point layout needs a cross_pipe between the bellows of a bogie")
     spec = CarCircuit(layout, bellow, tank, pipe, valves, lv, dpv, supply, cross)
     names = {**{b: "bellow" for b in BELLOWS}, **{f"tank_{b}": "tank" for b in BELLOWS},
              **{f"pipe_{b}": "pipe" for b in BELLOWS}, **{f"lv_{b}": "levelling_valve" for b in BELLOWS},

@@ -35,19 +35,21 @@ def car_circuit(bellow: Bellow, tank: Optional[Tank], pipe: Pipe, *, levelling: 
         if tank is not None:
             comps[f"tank_{b}"] = tank
             comps[f"pipe_{b}"] = dataclasses.replace(pipe, a=b, b=f"tank_{b}")
+    if points not in (2, 4):
+        raise ValueError(f"points must be 2 or 4, got {points}")
+    if points == 2:
+        if cross_pipe is None:
+            raise ValueError("a two-point circuit needs a cross pipe between the bellows of a bogie")
+        for bogie, (left, right) in BOGIES.items():
+            comps[f"cross_{bogie}"] = dataclasses.replace(cross_pipe, a=left, b=right)
     if levelling is not None:
         comps["supply"] = supply
         if points == 4:
             for b in BELLOWS:
                 comps[f"lv_{b}"] = dataclasses.replace(levelling, bellow=b, sensed=(b,), supply="supply")
-        elif points == 2:
-            if cross_pipe is None:
-                raise ValueError("a two-point circuit needs a cross pipe between the bellows of a bogie")
+        else:
             for bogie, (left, right) in BOGIES.items():
                 comps[f"lv_{bogie}"] = dataclasses.replace(levelling, bellow=left, sensed=(left, right), supply="supply")
-                comps[f"cross_{bogie}"] = dataclasses.replace(cross_pipe, a=left, b=right)
-        else:
-            raise ValueError(f"points must be 2 or 4, got {points}")
     if differential is not None:
         for bogie, (left, right) in BOGIES.items():
             comps[f"dpv_{bogie}"] = dataclasses.replace(differential, a=left, b=right)
