@@ -21,14 +21,21 @@ from .scenario import RampTest, Scenario, SineTest
 MACH_WARNING = 0.3
 
 
-def run_rig(scenario: Scenario, out_dir: Path, progress: Progress) -> List[Dict[str, object]]:
-    """Run a rig scenario into ``out_dir``; returns the summary rows."""
+def run_rig(scenario: Scenario, out_dir: Path, progress: Progress):
+    """Run a rig scenario into ``out_dir``; returns (summary rows, divergence diagnoses)."""
     t0 = time.perf_counter()
     runner = {"rig_ramp": _ramp, "rig_sine": _sine, "rig_stiffness": _stiffness, "rig_table2": _table2}[scenario.kind]
-    rows = runner(scenario, out_dir, progress)
+    diagnoses: List[str] = []
+    rows = runner(scenario, out_dir, progress, diagnoses)
     write_rows(out_dir / "summary.csv", rows)
-    write_run_json(out_dir, scenario, time.perf_counter() - t0)
-    return rows
+    write_run_json(out_dir, scenario, time.perf_counter() - t0, {"diverged": "; ".join(diagnoses) or None})
+    return rows, diagnoses
+
+
+def _keep_diagnosis(ts, diagnoses: List[str], progress: Progress) -> None:
+    if ts.diagnosis:
+        diagnoses.append(ts.diagnosis)
+        progress(f"stopped early, results kept up to there: {ts.diagnosis}")
 
 
 def _series_columns(ts) -> Dict[str, np.ndarray]:
@@ -39,7 +46,7 @@ def _series_columns(ts) -> Dict[str, np.ndarray]:
     return cols
 
 
-def _ramp(scenario: Scenario, out: Path, progress: Progress):
+def _ramp(scenario: Scenario, out: Path, progress: Progress, diagnoses: List[str]):
     test: RampTest = scenario.test
     rig = scenario.rig
     rows, panels = [], []
@@ -50,6 +57,7 @@ def _ramp(scenario: Scenario, out: Path, progress: Progress):
             progress(f"ramp {config}, k = {k_label(k)} W/K")
             ts = run_time_series(comps, k, ramp_motion(test.amplitude_m, test.ramp_s), test.duration_s, test.samples,
                                  max_step_s=test.ramp_s / 50, p0_Pa=rig.initial_pressures(comps))
+            _keep_diagnosis(ts, diagnoses, progress)
             write_columns(out / "timeseries" / f"ramp_{config}_k={k_label(k)}.csv", _series_columns(ts))
             curves.append(Curve(ts.t_s, ts.force_N / 1e3, k_legend(k)))
             temps.append(Curve(ts.t_s, ts.T_K[0], k_legend(k)))
@@ -63,7 +71,7 @@ def _ramp(scenario: Scenario, out: Path, progress: Progress):
     return rows
 
 
-def _sine(scenario: Scenario, out: Path, progress: Progress):
+def _sine(scenario: Scenario, out: Path, progress: Progress, diagnoses: List[str]):
     test: SineTest = scenario.test
     rig = scenario.rig
     comps = rig.components(with_tank=rig.tank is not None)
@@ -74,6 +82,7 @@ def _sine(scenario: Scenario, out: Path, progress: Progress):
         progress(f"sine {test.frequency_Hz:g} Hz, {test.duration_s:g} s, k = {k_label(k)} W/K")
         ts = run_time_series(comps, k, sine_motion(test.amplitude_m, test.frequency_Hz), test.duration_s, n,
                              max_step_s=period / 20, p0_Pa=rig.initial_pressures(comps))
+        _keep_diagnosis(ts, diagnoses, progress)
         write_columns(out / "timeseries" / f"sine_{test.frequency_Hz:g}Hz_k={k_label(k)}.csv", _series_columns(ts))
         curves.append(Curve(ts.t_s, ts.T_K[0], k_legend(k)))
         pcurves.append(Curve(ts.t_s, ts.p_Pa[0] / 1e5, k_legend(k)))
@@ -92,6 +101,8 @@ def _sine_summary(ts, test: SineTest) -> Dict[str, object]:
     spp = test.samples_per_period
     T = ts.T_K[0]
     n_per = (T.size - 1) // spp
+    if n_per < 2:                       # stopped within the first periods
+        return {"T_bellow_max_K": T.max(), "T_bellow_min_K": T.min(), "stabilised": False}
     means = np.array([T[i * spp:(i + 1) * spp].mean() for i in range(n_per)])
     tail = means[-max(2, n_per // 10):]
     drift = (tail[-1] - tail[0]) / max(tail.size - 1, 1)
@@ -101,7 +112,7 @@ def _sine_summary(ts, test: SineTest) -> Dict[str, object]:
             "p_bellow_mean_last_period_Pa": ts.p_Pa[0][-spp:].mean()}
 
 
-def _stiffness(scenario: Scenario, out: Path, progress: Progress):
+def _stiffness(scenario: Scenario, out: Path, progress: Progress, diagnoses: List[str]):
     test = scenario.test
     rig = scenario.rig
     comps = rig.components(with_tank=rig.tank is not None)
@@ -165,7 +176,7 @@ def _spans_decades(curves) -> bool:
     return bool(values) and max(values) > 10 * min(values)
 
 
-def _table2(scenario: Scenario, out: Path, progress: Progress):
+def _table2(scenario: Scenario, out: Path, progress: Progress, diagnoses: List[str]):
     rig, test = scenario.rig, scenario.test
     progress("quasi-static stiffness (Table 2)")
     table = quasi_static_stiffness_table(rig.bellow, rig.tank, rig.pipe, rig.p0_Pa, AIR.gamma, test.amplitude_m, test.ramp_s)

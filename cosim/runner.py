@@ -54,7 +54,8 @@ def _cell(v) -> str:
 def run_scenario(scenario: Scenario, out_dir: Path, progress: Progress) -> Outcome:
     if scenario.kind in RIG_KINDS:
         from .rig_runner import run_rig
-        return Outcome(scenario, run_rig(scenario, out_dir, progress))
+        rows, diagnoses = run_rig(scenario, out_dir, progress)
+        return Outcome(scenario, rows, diverged="; ".join(diagnoses) or None)
     if scenario.kind == "curve_entry":
         from .curve import run_curve
         return run_curve(scenario, out_dir, progress)

@@ -292,6 +292,10 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
             for i, c in enumerate(test.configurations):
                 if c not in ("bellow_tank", "bellow_only"):
                     raise ScenarioError(path, ["test", f"configurations[{i}]"], "expected bellow_tank or bellow_only")
+        stroke = rig.bellow.V0_m3 / rig.bellow.dV_dz_m2
+        if isinstance(test, (RampTest, SineTest, StiffnessTest, QuasiStaticTest)) and not abs(test.amplitude_m) < stroke:
+            raise ScenarioError(path, ["test", "amplitude_m"], f"|amplitude| must be below V0/(dV/dz) = {stroke:.4g} m, "
+                                                               f"where the bellow volume vanishes; got {test.amplitude_m}")
         if isinstance(test, StiffnessTest) and any(f <= 0 for f in test.frequencies_Hz):
             raise ScenarioError(path, ["test", "frequencies_Hz"], "frequencies must be > 0 Hz")
         return Scenario(**common, rig=rig, test=test)

@@ -485,6 +485,17 @@ class Circuit:
         sign = (self._a == i).astype(float) - (self._b == i).astype(float)
         return sign @ x[self.layout.mass_through]
 
+    #: below this fraction of its nominal volume a chamber counts as crushed flat (non-physical)
+    MIN_VOLUME_FRACTION = 1e-3
+
+    def physical_margin(self, x, z_m) -> float:
+        """> 0 while every chamber keeps a positive mass, temperature and more than
+        MIN_VOLUME_FRACTION of its volume; crosses zero when one of them stops being physical."""
+        x2 = x.reshape(self.layout.size, -1)
+        V = self._V0 - self._Ez @ self._per_bellow(z_m, x2)
+        return float(min(np.min(x2[self._s_m]), np.min(x2[self._s_T]),
+                         np.min(V / self._V0) - self.MIN_VOLUME_FRACTION))
+
     def check_state(self, x, t_s: float) -> None:
         """Raise :class:`CircuitDiverged` naming the component if a state is non-finite or non-physical."""
         lay = self.layout

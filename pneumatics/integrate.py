@@ -87,9 +87,19 @@ def absolute_tolerances(circuit: Circuit, rtol: float) -> np.ndarray:
 
 def simulate(circuit: Circuit, x0: np.ndarray, t_end_s: float, motion: Motion, *, t_eval=None,
              method: str = "LSODA", rtol: float = 1e-8, max_step_s: float = np.inf):
-    """Integrate a single case (1-D state) with scipy's adaptive ``solve_ivp``; returns its result."""
+    """Integrate a single case (1-D state) with scipy's adaptive ``solve_ivp``; returns its result.
+
+    A failed integration is returned too (``sol.success`` False, ``sol.t``/``sol.y`` up to the
+    failure) so that the caller can keep what was computed and diagnose it; it stops as soon as
+    a chamber stops being physical (see Circuit.physical_margin) instead of crawling on."""
+    def non_physical(t, x):
+        return circuit.physical_margin(x, motion(t)[0])
+    non_physical.terminal = True
+
     sol = solve_ivp(circuit_rhs(circuit, motion), (0.0, t_end_s), x0, method=method, t_eval=t_eval, rtol=rtol,
-                    atol=absolute_tolerances(circuit, rtol), max_step=max_step_s)
-    if not sol.success:
-        raise RuntimeError(f"pneumatic integration failed: {sol.message}")
+                    atol=absolute_tolerances(circuit, rtol), max_step=max_step_s, events=non_physical)
+    if sol.status == 1:
+        sol.success = False
+        sol.message = (f"a chamber stopped being physical (mass or temperature <= 0, or volume below "
+                       f"{circuit.MIN_VOLUME_FRACTION:g} of nominal)")
     return sol

@@ -57,6 +57,7 @@ class TimeSeries:
     p_Pa: np.ndarray
     T_K: np.ndarray
     chamber_names: List[str]
+    diagnosis: Optional[str] = None   # why the integration stopped early (the arrays end there)
 
 
 def run_time_series(components: Dict[str, object], k_W_per_K: float, motion: Motion, t_end_s: float,
@@ -67,9 +68,17 @@ def run_time_series(components: Dict[str, object], k_W_per_K: float, motion: Mot
     x0 = circuit.initial_state(p0_Pa)
     t = np.linspace(0.0, t_end_s, n_samples)
     sol = simulate(circuit, x0, t_end_s, motion, t_eval=t, max_step_s=max_step_s, rtol=rtol)
-    z = np.array([motion(ti)[0] for ti in t]).T
+    diagnosis = None
+    if not sol.success:
+        lay = circuit.layout
+        state = {f"{q}_{n}": sol.y[sl][i, -1] for q, sl in (("m_kg", lay.m), ("T_K", lay.T))
+                 for i, n in enumerate(circuit.chamber_names)} if sol.t.size else {}
+        diagnosis = (f"integration stopped at t = {sol.t[-1] if sol.t.size else 0.0:.6g} s "
+                     f"(k = {k_W_per_K:g} W/K): {sol.message}; last state " + ", ".join(f"{k}={v:.6g}" for k, v in state.items()))
+    t = sol.t
+    z = np.array([motion(ti)[0] for ti in t]).T.reshape(1, -1)
     out = circuit.outputs(sol.y, z)
-    return TimeSeries(t, z[0], out.bellow_force_N[0], out.p_Pa, out.T_K, circuit.chamber_names)
+    return TimeSeries(t, z[0], out.bellow_force_N[0], out.p_Pa, out.T_K, circuit.chamber_names, diagnosis)
 
 
 @dataclass

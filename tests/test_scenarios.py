@@ -144,3 +144,22 @@ def test_set_override_is_validated(tmp_path):
         load_scenario(path, overrides=["test.ramp_s=-1"])
     assert info.value.path == "test.ramp_s"
     assert load_scenario(path, overrides=["test.ramp_s=2"]).test.ramp_s == 2.0
+
+
+def test_amplitude_beyond_the_bellow_stroke_is_rejected(tmp_path):
+    # V = V0 - (dV/dz) z vanishes at z = 0.012 / 0.13 = 92 mm
+    err = error_for(tmp_path, rig(**{"test.amplitude_m": 0.1}))
+    assert err.path == "test.amplitude_m" and "V0/(dV/dz)" in err.reason
+
+
+def test_a_run_that_diverges_keeps_its_results_and_says_where(tmp_path, capsys):
+    """Crushing a bellow (alone) to 99.9 % of its stroke makes it stiff beyond what the integrator
+    can follow in the time given; the run must stop with a diagnosis, keep the series up to
+    there and exit 1 -- here provoked through the API, since the scenario loader refuses it."""
+    import numpy as np
+    from pneumatics.chamber import Bellow
+    from pneumatics.rig import ramp_motion, run_time_series
+    stroke = 0.012 / 0.13
+    ts = run_time_series({"bellow": Bellow(p0_Pa=4e5)}, 0.0, ramp_motion(1.5 * stroke, 1.0), 2.0, 201)
+    assert ts.diagnosis is not None and "t = " in ts.diagnosis and "T_K_bellow" in ts.diagnosis
+    assert 0.5 < ts.t_s[-1] < 2.0 and np.all(np.isfinite(ts.force_N))
