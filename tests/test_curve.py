@@ -33,8 +33,8 @@ def test_straight_run_stays_level_and_consumes_no_air(tmp_path):
 
 @pytest.fixture(scope="module")
 def curve_runs(tmp_path_factory):
-    """A short curve entry (10 s: 8 m run-up, 15 m transition, ~77 m of arc) for k = 0 and inf."""
-    s = curve_scenario(tmp_path_factory.mktemp("curve"), k=(0.0, float("inf")), duration_s=10.0, arc_m=100.0)
+    """A short curve entry (16 s: 8 m run-up, 15 m transition, ~137 m of arc) for k = 0 and inf."""
+    s = curve_scenario(tmp_path_factory.mktemp("curve"), k=(0.0, float("inf")), duration_s=16.0, arc_m=150.0)
     return s, {v: simulate_curve(s, valves=v) for v in (False, True)}
 
 
@@ -43,13 +43,14 @@ def test_valves_bring_the_bellows_back_into_the_dead_band(curve_runs):
     ks, rec, diag, _ = runs[True]
     assert not diag
     dead_band = s.circuit.levelling_valve.supply_lever_m[1] / s.circuit.levelling_valve.lever_gain
-    z_end = rec["crushing_m"][-1]
-    # without valves the roll in the arc crushes the outer bellows beyond the dead band...
-    z_off = runs[False][1]["crushing_m"][-1]
-    assert np.abs(z_off).max() > dead_band
-    # ...with valves every bellow is back within it (plus 1 mm: the valve closes at the dead band
-    # edge, the car still settles on its suspension afterwards)
-    assert np.abs(z_end).max() < dead_band + 1e-3
+    last = rec["t_s"] > rec["t_s"][-1] - 3.0                  # the last 3 s, in the arc
+    # without valves the roll in the arc crushes the bellows well beyond the dead band...
+    z_off = np.abs(runs[False][1]["crushing_m"][last]).mean(axis=0)
+    assert np.all(z_off > 2 * dead_band)
+    # ...with valves every bellow is back at its edge: the mean |z| over the last 3 s is within the
+    # dead band plus 1 mm (the car has no dampers: a ~1 Hz sway of about +-1 mm persists)
+    z_on = np.abs(rec["crushing_m"][last]).mean(axis=0)
+    assert np.all(z_on < dead_band + 1e-3), z_on
     # air went in (outer bellows) and out (inner bellows)
     assert np.all(rec["air_from_supply_kg"][-1] > 0) and np.all(rec["air_to_atmosphere_kg"][-1] > 0)
 

@@ -3,7 +3,9 @@
 * :mod:`vehicle.params` -- :class:`~vehicle.params.VehicleParams` (SI, documented defaults);
 * :mod:`vehicle.car` -- :class:`~vehicle.car.MetroCar`, the multibody model the co-simulation
   master drives macro-step by macro-step;
-* :mod:`vehicle.track` -- track centre-line geometry (curve entry).
+* :mod:`vehicle.track` -- track centre-line geometry (curve entry);
+* :mod:`vehicle.guidance` -- :class:`~vehicle.guidance.TrackSampler`, the tabulated track the
+  running car evaluates every time step.
 
 This package must not import ``pneumatics`` or ``cosim``.
 """

@@ -81,6 +81,17 @@ class VehicleParams:
     # ~3 bar gauge (Manchester secondary lateral: 160 kN/m per side). No traction rod is
     # modelled: the shear stiffness also holds the carbody longitudinally (stationary tests).
     bellow_shear_stiffness_N_per_m: float = 120.0e3
+    # Lateral bumpstops (one per bogie: carbody centre pivot against stops on the bogie frame).
+    # Clearance (reasoning, no published value for this car): airspring bogies typically leave
+    # +-30...40 mm of free lateral secondary travel; at the paper's 1 m/s^2 unbalanced lateral
+    # acceleration (R = 100 m, 10 m/s, no cant) the four bellows' shear alone deflect
+    # 17 t x 1 m/s^2 / (4 x 120 kN/m) = 35 mm, so 40 mm keeps the stops free in the steady curve
+    # (measured at the stop: 33 mm steady, 37 mm peak in the undamped sway after the transition)
+    # and catches larger excursions (no lateral dampers in this car).
+    # Stiffness: order of the initial rate of a rubber bumpstop, ~1 MN/m (real stops are
+    # progressive; linear past the clearance is the usual simplification).
+    lateral_bumpstop_clearance_m: float = 0.040
+    lateral_bumpstop_stiffness_N_per_m: float = 1.0e6
 
     # --- wheel-rail vertical contact, Q = C_H * delta^1.5 (+ damping, never pulling) ---
     # Hertz with the equivalent-sphere approximation (wheel R 0.42 m on a 0.3 m rail crown,

@@ -1,0 +1,109 @@
+"""Wall time of the running exudyn car on the paper's curve entry (not run as a test).
+
+Paper section 4.2: 10 m/s, straight, 15 m clothoid, R = 100 m arc, no cant; here 30 m of
+straight (the car starts with its rear wheelset at s = 0) and 30 s simulated (300 m). Emulates
+the co-simulation master as benchmarks/bench_vehicle.py does: every macro-step it reads the
+bellow crushing, sets the forces of an adiabatic bellow+tank pair linearised about the static
+state (F = F0 + k z, dF/dz = k = 243 kN/m, paper Table 2), advances the car and reads the
+wheel loads, the carbody roll and lateral offset.
+
+    python benchmarks/bench_vehicle_curve.py            # 3 runs per case (~1 min)
+    python benchmarks/bench_vehicle_curve.py --quick    # 1 run of the default case
+
+Prints, per (macro-step, internal step), the median over the runs of the wall time per 30 s
+simulated, Newton iterations per internal step, fresh Jacobians, the split of one macro-step
+(bellow_crushing, set_bellow_forces, advance, outputs) in microseconds, and the cost of the
+PreStep user function (track, guidance, end moments, rail couples) per internal step. The end
+roll is printed as a check that all cases compute the same thing.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+from vehicle.car import MetroCar
+from vehicle.params import VehicleParams
+from vehicle.track import TrackGeometry
+
+K_ADIABATIC_N_PER_M = 243e3  # paper Table 2, bellow + tank, adiabatic
+SPEED_M_PER_S = 10.0
+HORIZON_S = 30.0
+
+
+def paper_track() -> TrackGeometry:
+    return TrackGeometry.curve_entry(straight_m=30.0, transition_m=15.0, radius_m=100.0,
+                                     arc_m=SPEED_M_PER_S * HORIZON_S + 10.0)
+
+
+def run(macro_s: float, step_s: float, horizon_s: float = HORIZON_S,
+        time_prestep: bool = False) -> dict:
+    car = MetroCar(VehicleParams(), step_s=step_s, track=paper_track(),
+                   speed_m_per_s=SPEED_M_PER_S)
+    prestep = [0.0, 0]
+    if time_prestep:  # wrap the PreStep user function to time it (adds ~0.3 us per call)
+        inner = car._pre_step
+
+        def timed(mbs, t):
+            t0 = time.perf_counter()
+            ok = inner(mbs, t)
+            prestep[0] += time.perf_counter() - t0
+            prestep[1] += 1
+            return ok
+
+        car.mbs.SetPreStepUserFunction(timed)
+    F0 = car.static_bellow_forces_N()
+    k = np.full(4, K_ADIABATIC_N_PER_M)
+    n = int(round(horizon_s / macro_s))
+    split = np.zeros(4)
+    pc = time.perf_counter
+    start = pc()
+    for i in range(n):
+        t0 = pc()
+        z, _ = car.bellow_crushing()
+        t1 = pc()
+        car.set_bellow_forces(F0 + k * z, k)
+        t2 = pc()
+        car.advance((i + 1) * macro_s)
+        t3 = pc()
+        car.wheel_loads_N()
+        car.carbody_roll_rad()
+        car.carbody_lateral_m()
+        t4 = pc()
+        split += (t1 - t0, t2 - t1, t3 - t2, t4 - t3)
+    wall = pc() - start
+    steps = horizon_s / min(step_s, macro_s)
+    return {"wall_per_30s": wall / horizon_s * 30.0,
+            "newton_per_step": car._solver.it.newtonStepsCount / steps,
+            "jacobians": car.jacobian_count, "split_us": split / n * 1e6,
+            "prestep_us": prestep[0] / max(prestep[1], 1) * 1e6,
+            "roll_end_rad": car.carbody_roll_rad()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="1 run of the 5 ms / 5 ms case")
+    args = ap.parse_args()
+    runs = 1 if args.quick else 3
+    cases = [(5e-3, 5e-3)] if args.quick else [(5e-3, 5e-3), (5e-3, 2.5e-3), (10e-3, 5e-3),
+                                               (10e-3, 10e-3)]
+    print(f"curve entry, {HORIZON_S:g} s simulated at {SPEED_M_PER_S:g} m/s; "
+          f"median of {runs} run(s)")
+    print(" macro   step | wall/30 s | Newton/step  Jacobians |"
+          " crush  set  advance  outputs [us/macro] | roll_end [rad]")
+    for macro, step in cases:
+        res = [run(macro, step) for _ in range(runs)]
+        w = statistics.median(r["wall_per_30s"] for r in res)
+        r0 = res[0]
+        sp = np.median([r["split_us"] for r in res], axis=0)
+        print(f"{macro * 1e3:4.0f}ms {step * 1e3:4.1f}ms | {w:8.3f} s |"
+              f" {r0['newton_per_step']:10.2f} {r0['jacobians']:10d} |"
+              f" {sp[0]:5.0f} {sp[1]:4.0f} {sp[2]:8.0f} {sp[3]:8.0f} | {r0['roll_end_rad']:.6f}")
+    r = run(5e-3, 5e-3, horizon_s=10.0, time_prestep=True)
+    print(f"PreStep user function (5 ms steps, 10 s): {r['prestep_us']:.1f} us per internal step")
+
+
+if __name__ == "__main__":
+    main()
