@@ -29,7 +29,8 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
         raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
     x0 = circuit.initial_state(static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa),
                                n_cases=len(k_values))
-    return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling)
+    return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling,
+                        case_labels=[f"k = {k_label(k)} W/K" for k in k_values])
 
 
 def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:
@@ -73,13 +74,22 @@ def simulate(scenario: Scenario, make_car: CarFactory, duration_s: float, label:
         ks += chunk
         arrays.append(rec)
         if diag:
-            diagnoses.append(f"k = {','.join(k_label(k) for k in chunk)} W/K: {diag}")
-    n = min(len(a["t_s"]) for a in arrays)      # a diverged chunk stops early
-    merged = {name: np.concatenate([a[name][:n] for a in arrays], axis=-1) if name != "t_s" else arrays[0]["t_s"][:n]
-              for name in arrays[0]}
+            diagnoses.append(diag)
+    # a process whose cases all diverged stopped early: pad its record with NaN
+    longest = max(arrays, key=lambda a: len(a["t_s"]))
+    n = len(longest["t_s"])
+    merged = {name: np.concatenate([_pad(a[name], n) for a in arrays], axis=-1) for name in arrays[0] if name != "t_s"}
+    merged["t_s"] = longest["t_s"]
     order = np.argsort(ks)                        # inf sorts last
     merged = {name: (v[..., order] if name != "t_s" else v) for name, v in merged.items()}
     return [ks[i] for i in order], merged, diagnoses
+
+
+def _pad(values: np.ndarray, n: int) -> np.ndarray:
+    if len(values) == n:
+        return values
+    pad = np.full((n - len(values),) + values.shape[1:], np.nan)
+    return np.concatenate([values, pad])
 
 
 def record_columns(rec: Dict[str, np.ndarray], j: int) -> Dict[str, np.ndarray]:

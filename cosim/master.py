@@ -68,22 +68,41 @@ class Record:
 
 class CoSimulation:
     """Couple ``cars`` (exudyn models with the vehicle.car.MetroCar interface) to ``circuit``,
-    whose k array has one entry per car."""
+    whose k array has one entry per car.
+
+    Cases are independent: one that diverges (its multibody solver fails, or its air leaves the
+    physical range) is stopped and frozen, with a diagnosis, while the others go on; its record
+    holds NaN from then on.
+    """
 
     def __init__(self, cars: Sequence, circuit: Circuit, x0: np.ndarray, macro_step_s: float,
-                 pneumatic_step_s: float, coupling: str = "linearised"):
+                 pneumatic_step_s: float, coupling: str = "linearised", case_labels: Optional[Sequence[str]] = None):
         if coupling not in COUPLINGS:
             raise ValueError(f"coupling must be one of {COUPLINGS}, got {coupling!r}")
         self.cars, self.circuit, self.x = list(cars), circuit, x0.copy()
         self.H, self.coupling = macro_step_s, coupling
         self.h_pneumatic = stable_step_s(circuit, x0, pneumatic_step_s)
         self.t = 0.0
+        self.labels = list(case_labels or (f"case {j}" for j in range(len(self.cars))))
+        self.active = np.ones(len(self.cars), bool)
+        self.diagnoses: List[str] = []
         self.z, self.zd = self._crushing()
         self._supply = "supply" in circuit.node_names
 
     def _crushing(self):
-        zs, zds = zip(*(car.bellow_crushing() for car in self.cars))
+        zs, zds = [], []
+        for j, car in enumerate(self.cars):
+            if self.active[j]:
+                zj, zdj = car.bellow_crushing()
+            else:                                    # a stopped case stays where it stopped
+                zj, zdj = self.z[:, j], np.zeros(self.z.shape[0])
+            zs.append(zj)
+            zds.append(zdj)
         return np.stack(zs, axis=1), np.stack(zds, axis=1)
+
+    def _stop(self, j: int, reason: str) -> None:
+        self.active[j] = False
+        self.diagnoses.append(f"{self.labels[j]}: {reason}")
 
     def step(self) -> None:
         """One macro-step (see the module docstring)."""
@@ -96,49 +115,64 @@ class CoSimulation:
             K = self.circuit.bellow_stiffness_N_per_m(self.x, self.z)
         else:
             F, K = self.circuit.bellow_forces_N(self.x, self.z), None
-        for j, car in enumerate(self.cars):
+        for j in np.flatnonzero(self.active):
+            car = self.cars[j]
             car.set_bellow_forces(F[:, j], None if K is None else K[:, j])
-            car.advance(t1)
+            try:
+                car.advance(t1)
+            except RuntimeError as exc:               # the multibody solver gave up
+                self._stop(j, f"multibody solver failed advancing from t = {self.t:.6g} to {t1:.6g} s: {exc}")
         z1, zd1 = self._crushing()
         motion = hermite_motion(self.t, t1, self.z, self.zd, z1, zd1)
-        self.x = advance(self.circuit, self.x, self.t, t1, motion, self.h_pneumatic)
-        self.circuit.check_state(self.x, t1)
-        self.t, self.z, self.zd = t1, z1, zd1
+        with np.errstate(all="ignore"):               # a diverging column is diagnosed just below
+            x1 = advance(self.circuit, self.x, self.t, t1, motion, self.h_pneumatic)
+        for j in np.flatnonzero(self.active):
+            try:
+                self.circuit.check_state(x1[:, j], t1)
+            except CircuitDiverged as exc:
+                self._stop(j, str(exc))
+        x1[:, ~self.active] = self.x[:, ~self.active]  # stopped cases stay frozen
+        self.x, self.t, self.z, self.zd = x1, t1, z1, zd1
 
     def sample(self, record: Record) -> None:
         c = self.circuit
         out = c.outputs(self.x, self.z)
         idx = [c.chamber_names.index(b) for b in c.bellow_names]
+        stopped = ~self.active
+
+        def live(values):
+            values = np.array(values, dtype=float)
+            values[..., stopped] = np.nan
+            return values
+
         record.t_s.append(self.t)
-        record.wheel_load_N.append(np.stack([car.wheel_loads_N() for car in self.cars], axis=1))
-        record.crushing_m.append(self.z.copy())
-        record.bellow_force_N.append(out.bellow_force_N)
-        record.bellow_p_Pa.append(out.p_Pa[idx])
-        record.bellow_T_K.append(out.T_K[idx])
-        record.roll_rad.append(np.array([car.carbody_roll_rad() for car in self.cars]))
-        zero = np.zeros(len(self.cars))
-        record.air_from_supply_kg.append(c.mass_from(self.x, "supply") if self._supply else zero)
-        record.air_to_atmosphere_kg.append(-c.mass_from(self.x, "atmosphere"))
-        record.link_flow_kg_per_s.append(out.link_flow_kg_per_s)
-        record.total_mass_kg.append(c.total_mass_kg(self.x))
+        record.wheel_load_N.append(live(np.stack([car.wheel_loads_N() if a else np.zeros(8)
+                                                  for car, a in zip(self.cars, self.active)], axis=1)))
+        record.crushing_m.append(live(self.z))
+        record.bellow_force_N.append(live(out.bellow_force_N))
+        record.bellow_p_Pa.append(live(out.p_Pa[idx]))
+        record.bellow_T_K.append(live(out.T_K[idx]))
+        record.roll_rad.append(live([car.carbody_roll_rad() if a else 0.0 for car, a in zip(self.cars, self.active)]))
+        record.air_from_supply_kg.append(live(c.mass_from(self.x, "supply") if self._supply else np.zeros(len(self.cars))))
+        record.air_to_atmosphere_kg.append(live(-c.mass_from(self.x, "atmosphere")))
+        record.link_flow_kg_per_s.append(live(out.link_flow_kg_per_s))
+        record.total_mass_kg.append(live(c.total_mass_kg(self.x)))
 
     def run(self, t_end_s: float, output_interval_s: float,
             progress: Optional[Callable[[str, bool], None]] = None) -> tuple[Record, Optional[str]]:
         """Advance to ``t_end_s``, sampling every ``output_interval_s``. Returns the record and,
-        if the run diverged, a diagnosis (the record then holds everything up to that point)."""
+        if a case diverged, the diagnoses (that case's record holds NaN from then on; the run
+        stops early only when every case has stopped)."""
         record = Record()
         every = max(1, round(output_interval_s / self.H))
         n = round(t_end_s / self.H)
         self.sample(record)
         for i in range(1, n + 1):
-            try:
-                self.step()
-            except CircuitDiverged as exc:
-                return record, str(exc)
-            except Exception as exc:  # the multibody solver failed: keep what was computed
-                return record, f"multibody solver failed at t = {self.t:.6g} s: {exc}"
-            if i % every == 0 or i == n:
+            self.step()
+            if i % every == 0 or i == n or not np.any(self.active):
                 self.sample(record)
+            if not np.any(self.active):
+                break
             if progress:
                 progress(f"t = {self.t:6.2f} / {t_end_s:g} s", False)
-        return record, None
+        return record, "; ".join(self.diagnoses) or None

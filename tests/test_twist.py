@@ -101,3 +101,49 @@ def test_check_exit_codes(tmp_path, capsys):
     assert (tmp_path / "cmp" / "compare_Q.png").exists() and (tmp_path / "cmp" / "compare_dqq.png").exists()
     # a folder that is not a run is bad input
     assert cli.main(["compare", str(tmp_path), "--out", str(tmp_path / "cmp2")]) == cli.EXIT_BAD_INPUT
+
+
+class _StandingCar:
+    """A stand-in with the MetroCar interface: bellows held at z = 0; it can fail at a given time."""
+
+    def __init__(self, fail_at_s=math.inf):
+        self.t, self.fail_at_s = 0.0, fail_at_s
+
+    def static_bellow_forces_N(self):
+        return np.full(4, 40e3)
+
+    def bellow_crushing(self):
+        return np.zeros(4), np.zeros(4)
+
+    def set_bellow_forces(self, F_N, dF_dz_N_per_m=None):
+        pass
+
+    def advance(self, t_end_s):
+        if t_end_s > self.fail_at_s:
+            raise RuntimeError("solver gave up")
+        self.t = t_end_s
+
+    def wheel_loads_N(self):
+        return np.full(8, 30e3)
+
+    def carbody_roll_rad(self):
+        return 0.0
+
+
+def test_a_diverging_case_stops_alone_and_keeps_its_record(tmp_path):
+    from cosim.car_runs import static_pressures
+    from cosim.master import CoSimulation
+    from pneumatics.circuit import Circuit
+    s = scenario(tmp_path)
+    comps = s.circuit.components()
+    circuit = Circuit(comps, k_W_per_K=np.array([0.0, 10.0]))
+    x0 = circuit.initial_state(static_pressures(comps, np.full(4, 40e3), circuit.atmosphere.p_Pa), n_cases=2)
+    cosim = CoSimulation([_StandingCar(), _StandingCar(fail_at_s=0.1)], circuit, x0, 0.005, 0.005,
+                         case_labels=["k = 0", "k = 10"])
+    record, diagnosis = cosim.run(0.3, 0.01)
+    Q = np.asarray(record.wheel_load_N)
+    t = np.asarray(record.t_s)
+    assert t[-1] == pytest.approx(0.3)                      # the healthy case ran to the end
+    assert np.all(np.isfinite(Q[:, :, 0]))
+    assert np.all(np.isfinite(Q[t < 0.1, :, 1])) and np.all(np.isnan(Q[t > 0.1, :, 1]))
+    assert diagnosis.startswith("k = 10: multibody solver failed advancing from t = 0.095 to 0.1 s")
