@@ -65,12 +65,18 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
 
 def _run(args) -> int:
+    import dataclasses
+
     from .runner import run_scenario
-    from .scenario import load_scenario
-    overrides = list(args.overrides)
+    from .scenario import CAR_KINDS, load_scenario
+    scenario = load_scenario(args.scenario, args.overrides, args.k)
     if args.jobs is not None:
-        overrides.append(f"solver.jobs={args.jobs}")
-    scenario = load_scenario(args.scenario, overrides, args.k)
+        if args.jobs < 1:
+            raise ScenarioError(args.scenario, ["--jobs"], f"expected at least 1 process, got {args.jobs}")
+        if scenario.kind in CAR_KINDS:      # rig scenarios run in one process
+            scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=args.jobs))
+    if args.command == "check" and not scenario.checks:
+        raise ScenarioError(scenario.file, ["checks"], "no checks to evaluate: add e.g. checks: ['dqq_max <= 0.6']")
     out = args.out or Path("results") / scenario.name
     progress = Progress(scenario.name, quiet=args.quiet)
     outcome = run_scenario(scenario, out, progress)
@@ -79,8 +85,6 @@ def _run(args) -> int:
     if outcome.diverged:
         return EXIT_FAILED
     if args.command == "check":
-        if not scenario.checks:
-            raise ScenarioError(scenario.file, ["checks"], "no checks to evaluate: add e.g. checks: ['dqq_max <= 0.6']")
         print(outcome.check_report())
         return EXIT_OK if outcome.checks_hold() else EXIT_FAILED
     return EXIT_OK

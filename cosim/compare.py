@@ -22,9 +22,11 @@ def _load(run_dir: Path):
 
 
 def _series(run_dir: Path, prefix: str):
+    """(case label, columns) of every time series ``prefix*.csv``; the label is the file name
+    without the prefix, e.g. ``bellow_tank_k=100`` or ``valves=on_k=inf``."""
     for path in sorted((run_dir / "timeseries").glob(f"{prefix}*.csv")):
-        data = np.genfromtxt(path, delimiter=",", names=True)
-        yield path.stem.split("k=")[-1], data
+        yield path.stem[len(prefix):].replace("_k=", ", k = ").replace("k=", "k = "), \
+            np.genfromtxt(path, delimiter=",", names=True)
 
 
 def compare_runs(run_dirs: Sequence[Path], out_dir: Path) -> List[Path]:
@@ -35,7 +37,7 @@ def compare_runs(run_dirs: Sequence[Path], out_dir: Path) -> List[Path]:
         raise ScenarioError(run_dirs[0], ["kind"], f"cannot compare runs of different kinds: {sorted(kinds)}")
     kind = kinds.pop()
     many = len(infos) > 1
-    label = (lambda d, k: f"{d.name}, k = {k}") if many else (lambda d, k: f"k = {k}")
+    label = (lambda d, case: f"{d.name}: {case}") if many else (lambda d, case: case)
     written = []
     if kind == "twist":
         for quantity, scale, unit in (("Q", 1e-3, "kN"), ("dqq", 1.0, "-")):
@@ -54,9 +56,17 @@ def compare_runs(run_dirs: Sequence[Path], out_dir: Path) -> List[Path]:
             for k in sorted({r["k_W_per_K"] for r in rows}, key=float):
                 pts = [r for r in rows if r["k_W_per_K"] == k]
                 curves.append(Curve([float(r["frequency_Hz"]) for r in pts],
-                                    [float(r["K_dyn_N_per_m"]) / 1e3 for r in pts], label(d, k), "o-"))
+                                    [float(r["K_dyn_N_per_m"]) / 1e3 for r in pts], label(d, f"k = {k}"), "o-"))
         written.append(save_panels(out_dir / "compare_stiffness.png",
                                    [Panel(curves, "frequency f [Hz]", "K_dyn [kN/m]", logx=True)], "Dynamic stiffness comparison"))
+    elif kind == "curve_entry":
+        panels = []
+        for column, scale, ylabel in (("roll_carbody_rad", 1e3, "carbody roll [mrad]"),
+                                      ("air_from_supply_kg", 1e3, "air injected from the supply [g]")):
+            curves = [Curve(data["t_s"], data[column] * scale, label(d, case))
+                      for d, _ in infos for case, data in _series(d, "curve_")]
+            panels.append(Panel(curves, "time t [s]", ylabel))
+        written.append(save_panels(out_dir / "compare_curve.png", panels, "Curve entry comparison", ncols=2))
     elif kind in ("rig_sine", "rig_ramp"):
         prefix = "sine_" if kind == "rig_sine" else "ramp_"
         column, ylabel = ("T_bellow_K", "bellow temperature T [K]") if kind == "rig_sine" else ("F_bellow_N", "bellow force F [N]")

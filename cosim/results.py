@@ -23,13 +23,14 @@ def write_columns(path: Path, columns: Mapping[str, Sequence[float]]) -> None:
 
 
 def write_rows(path: Path, rows: Iterable[Mapping[str, object]]) -> None:
-    """A CSV with one row per mapping (the first row's keys are the header)."""
+    """A CSV with one row per mapping (header: every key that appears; missing cells are nan)."""
     rows = list(rows)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as fh:
         if not rows:
             return
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        header = list(dict.fromkeys(key for row in rows for key in row))   # union, in first-seen order
+        writer = csv.DictWriter(fh, fieldnames=header, restval="nan")
         writer.writeheader()
         for row in rows:
             writer.writerow({k: _fmt(v) for k, v in row.items()})
@@ -108,7 +109,3 @@ class Progress:
         if force or now - self._last >= self.min_interval_s:
             self._last = now
             print(f"[{self.label} {now - self.t0:6.1f} s] {message}", file=self.stream, flush=True)
-
-    @property
-    def elapsed_s(self) -> float:
-        return time.perf_counter() - self.t0

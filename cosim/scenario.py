@@ -7,7 +7,9 @@ A scenario is a YAML mapping with a ``kind``:
   rig (paper §3) with a ``circuit`` of ``bellow``, ``tank`` (null: bellow alone), ``pipe``,
   ``p0_Pa`` and a ``test`` section;
 * ``twist``: the metro car on the EN 14363 twist (paper §4.1) with ``vehicle``, a car
-  ``circuit``, ``twist``, ``solver`` and ``checks``.
+  ``circuit``, ``twist``, ``solver`` and ``checks``;
+* ``curve_entry``: the car running into a curve (paper §4.2) with ``vehicle``, ``circuit``,
+  ``curve``, ``solver`` and ``checks``.
 
 Every error names the file, the key path and what was expected (:class:`ScenarioError`).
 """
@@ -29,6 +31,7 @@ from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
 from vehicle.params import VehicleParams
 
+from .master import COUPLINGS
 from .schema import ScenarioError, build, check_keys, coerce, k_values, require
 
 RIG_KINDS = ("rig_ramp", "rig_sine", "rig_stiffness", "rig_table2")
@@ -50,12 +53,16 @@ class RampTest:
 
 @dataclass(frozen=True)
 class SineTest:
-    """Fig. 5: z = a sin(2 pi f t) for ``duration_s``; the time history is sampled ``samples_per_period`` times a period."""
+    """Fig. 5: z = a sin(2 pi f t) for ``duration_s``; the time history is sampled
+    ``samples_per_period`` times a period. The run counts as stabilised when the mean bellow
+    temperature drifts by less than ``stable_drift_K_per_period`` over the last tenth of it
+    (default 1e-3 K: at 1 Hz, less than 4 K an hour)."""
 
     amplitude_m: float = 0.02
     frequency_Hz: float = 1.0
     duration_s: float = 300.0
     samples_per_period: int = 20
+    stable_drift_K_per_period: float = 1e-3
 
 
 @dataclass(frozen=True)
@@ -130,7 +137,6 @@ class SolverSettings:
     jobs: int = 2
 
 
-COUPLINGS = ("linearised", "explicit")
 
 
 @dataclass(frozen=True)
@@ -310,10 +316,32 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         raise ScenarioError(path, ["solver", "coupling"], f"expected one of {COUPLINGS}, got {solver.coupling!r}")
     if kind == "twist":
         tests = {"twist": _twist(data.get("twist"), path)}
+        duration = tests["twist"].duration_s
     else:
         tests = {"curve": _curve(data.get("curve"), vehicle, path)}
+        duration = tests["curve"].duration_s
+        if circuit.explicit is not None and len(set(tests["curve"].valve_settings)) > 1:
+            raise ScenarioError(path, ["curve", "valve_settings"], "an explicit circuit (circuit.components) has no "
+                                                                   "valves switch: give a single setting")
+    _check_steps(solver, duration, path)
     checks = _checks(data.get("checks", []), kind, path)
     return Scenario(**common, vehicle=vehicle, circuit=circuit, solver=solver, checks=checks, **tests)
+
+
+def _check_steps(solver: SolverSettings, duration_s: float, path) -> None:
+    """The run and its output interval must be whole numbers of macro-steps (nothing is rounded
+    silently), and the multibody step no longer than the macro-step."""
+    H = solver.macro_step_s
+    for key, value in (("output_interval_s", solver.output_interval_s), ("duration", duration_s)):
+        n = value / H
+        if abs(n - round(n)) > 1e-6 * max(n, 1.0) or round(n) < 1:
+            where = ["solver", key] if key != "duration" else ["solver", "macro_step_s"]
+            raise ScenarioError(path, where, f"the {key.replace('_s', '')} ({value:g} s) must be a whole number of "
+                                             f"macro-steps ({H:g} s)")
+    if solver.mechanics_step_s > H * (1 + 1e-9):
+        raise ScenarioError(path, ["solver", "mechanics_step_s"], f"must not exceed the macro-step ({H:g} s)")
+    if solver.jobs < 1:
+        raise ScenarioError(path, ["solver", "jobs"], f"expected at least 1 process, got {solver.jobs}")
 
 
 def _twist(data, path) -> TwistTest:
@@ -345,12 +373,26 @@ def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
     return curve
 
 
+def _chambers_and_pipe(data: Mapping, file):
+    """The bellow, the tank (``tank: null``: none) and the bellow-tank pipe of a circuit section;
+    initial pressures come from elsewhere (rig ``p0_Pa``, or the car's static load)."""
+    P = ["circuit"]
+    bellow = build(Bellow, data.get("bellow"), file, P + ["bellow"], p0_Pa=None, T0_K=None)
+    tank = _optional(Tank, data, "tank", file, P, p0_Pa=None, T0_K=None)
+    pipe = build(Pipe, data.get("pipe"), file, P + ["pipe"], a="", b="")
+    return bellow, tank, pipe
+
+
+def _optional(cls, data: Mapping, key: str, file, prefix, **fixed):
+    """``key: null`` means the component is absent; a missing key means its defaults."""
+    if key in data and data[key] is None:
+        return None
+    return build(cls, data.get(key), file, [*prefix, key], **fixed)
+
+
 def _rig_circuit(data: Mapping, file) -> RigCircuit:
     check_keys(data, ("bellow", "tank", "pipe", "p0_Pa"), file, ["circuit"])
-    bellow = build(Bellow, data.get("bellow"), file, ["circuit", "bellow"], p0_Pa=None, T0_K=None)
-    tank = None if ("tank" in data and data["tank"] is None) else build(
-        Tank, data.get("tank"), file, ["circuit", "tank"], p0_Pa=None, T0_K=None)
-    pipe = build(Pipe, data.get("pipe"), file, ["circuit", "pipe"], a="bellow", b="tank")
+    bellow, tank, pipe = _chambers_and_pipe(data, file)
     p0 = coerce(require(data, "p0_Pa", file, ["circuit"]), float, file, ["circuit", "p0_Pa"])
     if not p0 > 0:
         raise ScenarioError(file, ["circuit", "p0_Pa"], f"absolute pressure must be > 0 Pa, got {p0}")
@@ -397,17 +439,13 @@ def _car_circuit(data: Mapping, file) -> CarCircuit:
     if layout not in LAYOUTS:
         raise ScenarioError(file, ["circuit", "layout"], f"expected one of {LAYOUTS}, got {layout!r}")
     P = ["circuit"]
-    bellow = build(Bellow, data.get("bellow"), file, P + ["bellow"], p0_Pa=None, T0_K=None)
-    tank = None if ("tank" in data and data["tank"] is None) else build(
-        Tank, data.get("tank"), file, P + ["tank"], p0_Pa=None, T0_K=None)
-    pipe = build(Pipe, data.get("pipe"), file, P + ["pipe"], a="", b="")
+    bellow, tank, pipe = _chambers_and_pipe(data, file)
     valves = coerce(data.get("valves", False), bool, file, P + ["valves"])
     lv = build(LevellingValve, data.get("levelling_valve"), file, P + ["levelling_valve"],
-                    bellow="", supply="supply", sensed=())
-    dpv = None if ("differential_valve" in data and data["differential_valve"] is None) else build(
-        DifferentialPressureValve, data.get("differential_valve"), file, P + ["differential_valve"], a="", b="")
+               bellow="", supply="supply", sensed=())
+    dpv = _optional(DifferentialPressureValve, data, "differential_valve", file, P, a="", b="")
     supply = build(Supply, data.get("supply"), file, P + ["supply"])
-    cross = build(Pipe, data["cross_pipe"], file, P + ["cross_pipe"], a="", b="") if data.get("cross_pipe") else None
+    cross = build(Pipe, data["cross_pipe"], file, P + ["cross_pipe"], a="", b="") if data.get("cross_pipe") is not None else None
     if layout == "two_point" and cross is None:
         raise ScenarioError(file, P + ["cross_pipe"], "a two_point layout needs a cross_pipe between the bellows of a bogie")
     spec = CarCircuit(layout, bellow, tank, pipe, valves, lv, dpv, supply, cross)

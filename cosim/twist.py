@@ -64,7 +64,7 @@ def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
         write_columns(out / "timeseries" / f"twist_k={k_label(k)}.csv",
                       {**record_columns(rec, j), **{f"dqq_{w}": dqq[:, i, j] for i, w in enumerate(WHEELS)}})
     write_rows(out / "summary.csv", rows)
-    _plots(out, ks, rec, dqq, test)
+    _plots(out, ks, rec, dqq, test, _dqq_limit(scenario))
     diverged = "; ".join(diagnoses) or None
     metrics = {"dqq_max": max(r["dqq_max"] for r in rows)} if rows else {}
     write_run_json(out, scenario, time.perf_counter() - t0,
@@ -77,7 +77,13 @@ def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
     return outcome
 
 
-def _plots(out: Path, ks, rec, dqq, test: TwistTest) -> None:
+def _dqq_limit(scenario: Scenario) -> float:
+    """The limit to draw: the scenario's own dqq_max check, else EN 14363's 0.6."""
+    limits = [c.limit for c in scenario.checks if c.metric == "dqq_max"]
+    return min(limits) if limits else DQQ_LIMIT
+
+
+def _plots(out: Path, ks, rec, dqq, test: TwistTest, limit: float) -> None:
     Q = rec["wheel_load_N"]
     per_k = curves_per_k(rec["t_s"], ks)
     wheels = ("1L", "1R", "4L", "4R")
@@ -87,6 +93,6 @@ def _plots(out: Path, ks, rec, dqq, test: TwistTest) -> None:
                                    f"rail raised {test.height_m * 1e3:.0f} mm", ncols=2)
     save_panels(out / "dqq.png",
                 [Panel(per_k(dqq[:, WHEELS.index(w)]), "time t [s]", f"ΔQ/Q0 of wheel {w} [-]", f"wheel {w}",
-                       hlines=[(DQQ_LIMIT, "EN 14363 limit 0.6")]) for w in wheels],
+                       hlines=[(limit, f"limit {limit:g}")]) for w in wheels],
                 "Wheel unloading ΔQ/Q0 (positive: unloaded)", ncols=2)
     save_panels(out / "bellows.png", bellow_panels(rec, ks), "Bellow pressures and temperatures", ncols=2)

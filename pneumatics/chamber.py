@@ -84,6 +84,9 @@ def bellow_stiffness_N_per_m(bellow: Bellow, z_m, p_Pa, p_atm_Pa, polytropic_ind
     return bellow.dA_dz_m * (p_Pa - p_atm_Pa) + bellow.area_m2(z_m) * polytropic_index * p_Pa * bellow.dV_dz_m2 / V
 
 
-def quasi_static_stiffness_N_per_m(A_m2, p0_Pa, V_m3, polytropic_index):
-    """Table 2: n A^2 p0 / V (n = gamma adiabatic, 1 isothermal) for a cylindrical bellow of total volume V."""
-    return polytropic_index * A_m2 ** 2 * p0_Pa / V_m3
+def quasi_static_stiffness_N_per_m(bellow: Bellow, p0_Pa, V_m3, polytropic_index):
+    """Table 2: n A^2 p0 / V (n = gamma adiabatic, 1 isothermal) for a bellow whose air, of total
+    volume V (bellow plus tank), is compressed at z = 0: n A0 (dV/dz) p0 / V, with dV/dz = A0 for
+    the paper's cylindrical bellow (Table 1, design.md erratum 3). (dA/dz = 0 assumed: the
+    effective-area term dA/dz (p0 - p_atm) would add to it.)"""
+    return polytropic_index * bellow.A0_m2 * bellow.dV_dz_m2 * p0_Pa / V_m3

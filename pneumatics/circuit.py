@@ -292,7 +292,6 @@ class Circuit:
         self._or_C = _column([comps[n].C_m3_per_sPa for n in orifices])
         self._dpv = [comps[n] for n in dpvs]
         self._valves = [comps[n] for n in valves]
-        self.valve_names = valves
         self._b_crit = _column([comps[n].b_critical for n in orifices] +
                                [comps[n].b_critical for n in valves] * 2)
         self._supply_tables = _table_groups([(v.supply_lever_m, v.supply_C_m3_per_sPa) for v in self._valves])
@@ -474,10 +473,6 @@ class Circuit:
 
     def total_mass_kg(self, x) -> np.ndarray:
         return x[self.layout.m].sum(axis=0)
-
-    def internal_energy_J(self, x) -> np.ndarray:
-        lay = self.layout
-        return (x[lay.m] * x[lay.T]).sum(axis=0) * self.gas.cv_J_per_kgK
 
     def mass_from(self, x, node: str) -> np.ndarray:
         """Cumulative mass that left boundary node ``node`` into the circuit (negative: received) [kg]."""

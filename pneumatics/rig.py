@@ -5,6 +5,7 @@ periodic steady state (eq. 9, Fig. 6) and the quasi-static stiffness (Table 2).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Callable, Dict, Iterable, List, Optional
@@ -25,7 +26,7 @@ def bellow_tank_components(bellow: Bellow, tank: Optional[Tank], pipe: Optional[
     comps: Dict[str, object] = {BELLOW: bellow}
     if tank is not None:
         comps[TANK] = tank
-        comps[PIPE] = Pipe(BELLOW, TANK, **{k: v for k, v in vars(pipe).items() if k not in ("a", "b")})
+        comps[PIPE] = dataclasses.replace(pipe, a=BELLOW, b=TANK)
     return comps
 
 
@@ -57,6 +58,7 @@ class TimeSeries:
     p_Pa: np.ndarray
     T_K: np.ndarray
     chamber_names: List[str]
+    pipe_mach: np.ndarray             # largest pipe flow Mach number |q| / (rho A c), c at the colder end
     diagnosis: Optional[str] = None   # why the integration stopped early (the arrays end there)
 
 
@@ -78,7 +80,26 @@ def run_time_series(components: Dict[str, object], k_W_per_K: float, motion: Mot
     t = sol.t
     z = np.array([motion(ti)[0] for ti in t]).T.reshape(1, -1)
     out = circuit.outputs(sol.y, z)
-    return TimeSeries(t, z[0], out.bellow_force_N[0], out.p_Pa, out.T_K, circuit.chamber_names, diagnosis)
+    return TimeSeries(t, z[0], out.bellow_force_N[0], out.p_Pa, out.T_K, circuit.chamber_names,
+                      pipe_mach_number(circuit, sol.y, out), diagnosis)
+
+
+def pipe_mach_number(circuit: Circuit, x: np.ndarray, out) -> np.ndarray:
+    """Largest Mach number over the dynamic pipes, per sample: eq. (5) is an incompressible law,
+    outside its validity beyond Mach ~0.3 (design.md erratum 4). Velocity |q| / (rho_mean A),
+    sound speed sqrt(gamma R T) at the colder end."""
+    names = circuit.pipe_names
+    if not names:
+        return np.zeros(x.shape[-1])
+    gas, chambers = circuit.gas, circuit.chamber_names
+    mach = []
+    for i, name in enumerate(names):
+        pipe = circuit.components[name]
+        ends = [chambers.index(n) for n in (pipe.a, pipe.b) if n in chambers]
+        rho = np.mean([out.p_Pa[j] / (gas.R_J_per_kgK * out.T_K[j]) for j in ends], axis=0)
+        c = np.sqrt(gas.gamma * gas.R_J_per_kgK * np.min([out.T_K[j] for j in ends], axis=0))
+        mach.append(np.abs(x[circuit.layout.q][i]) / (rho * pipe.area_m2 * c))
+    return np.max(mach, axis=0)
 
 
 @dataclass
@@ -129,9 +150,10 @@ def dynamic_stiffness_sweep(components: Dict[str, object], k_values: Iterable[fl
 
     Cases (k, f) whose periods need similar numbers of RK4 steps (``dt_max_s`` or the thermal
     stability limit of the largest finite k, at least ``n_min`` per period) are solved as one
-    batch. Where Newton fails for a k (small k run very hot near the pipe resonance, far from the
-    atmospheric start), it is continued from the next larger k's periodic state at the same
-    frequency through intermediate k values.
+    batch. Where Newton fails for a case (small k run very hot near the pipe resonance, far from
+    the atmospheric start), it is retried from the periodic state of a converged neighbour: the
+    next larger k at the same frequency, then, round after round, the nearest converged
+    frequency at the same k (see _solve_with_continuation).
     """
     ks = np.array(sorted(set(float(k) for k in k_values), reverse=True))
     freqs = np.array(sorted(set(float(f) for f in frequencies_Hz)))
@@ -244,6 +266,6 @@ def quasi_static_stiffness_table(bellow: Bellow, tank: Tank, pipe: Pipe, p0_Pa: 
         p0 = {name: p0_Pa for name, c in comps.items() if isinstance(c, (Bellow, Tank))}
         for regime, k, n in (("adiabatic", 0.0, gamma), ("isothermal", math.inf, 1.0)):
             ts = run_time_series(comps, k, ramp_motion(amplitude_m, ramp_s), ramp_s, 3, p0_Pa=p0)
-            rows.append(QuasiStaticStiffness(config, regime, quasi_static_stiffness_N_per_m(bellow.A0_m2, p0_Pa, V, n),
+            rows.append(QuasiStaticStiffness(config, regime, quasi_static_stiffness_N_per_m(bellow, p0_Pa, V, n),
                                              (ts.force_N[-1] - ts.force_N[0]) / amplitude_m))
     return rows
