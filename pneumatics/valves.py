@@ -76,7 +76,8 @@ class DifferentialPressureValve:
 
 
 def lever_conductance(lever_m, table_lever_m, table_C):
-    """Sonic conductance at lever displacement ``lever_m`` (>= 0 opens this side; < 0 keeps it shut)."""
+    """Sonic conductance at lever displacement ``lever_m``: > 0 may open this side (beyond the
+    table's dead band); <= 0 keeps it shut."""
     return np.interp(np.maximum(lever_m, 0.0), table_lever_m, table_C) * (lever_m > 0.0)
 
 

@@ -202,7 +202,8 @@ def test_small_slow_ramp_stiffness_matches_table2_formula(with_tank, k, n):
     # (bellow+tank only) ~0.2-0.4 % from _pipe_ringing_bound, solver ~1e-8. All < 1 %.
     budget = (n + 1) / 2 * A_E * a / V + (_pipe_ringing_bound(n, T_ramp) if with_tank else 0.0)
     assert budget < 0.006
-    assert abs(K_sim / K_exp - 1.0) < 0.01, (K_sim, K_exp)
+    # within the budget (x 1.5 for the bound's approximations) and within the issue's 1 %
+    assert abs(K_sim / K_exp - 1.0) < min(1.5 * budget + 1e-6, 0.01), (K_sim, K_exp, budget)
 
 
 def _secant_stiffness(n, V, a):
@@ -234,10 +235,9 @@ def test_quasi_static_stiffness_table_against_exact_secant(table2_rows):
 
 
 def test_quasi_static_stiffness_table_bellow_only_within_1_percent(table2_rows):
-    for row in table2_rows:
+    for row in (r for r in table2_rows if r.configuration == "bellow only"):
         n = GAMMA if row.regime == "adiabatic" else 1.0
-        V = V_B + (V_T if row.configuration == "bellow and tank" else 0.0)
-        assert abs(row.simulated_N_per_m / table2_formula(n, V) - 1.0) < 0.01, row
+        assert abs(row.simulated_N_per_m / table2_formula(n, V_B) - 1.0) < 0.01, row
 
 
 # =============================================================================
@@ -654,19 +654,24 @@ def test_rk4_advance_converges_at_fourth_order():
     assert 12.0 < f1 / f2 < 20.0, (f1, f2)
 
 
-def test_rk4_default_step_agrees_with_simulate_on_a_sine():
-    """At the co-simulation's default 1 ms step, with flow reversals, RK4 is still accurate."""
+@pytest.mark.parametrize("h, rtol, rtol_force", [(1e-3, 1e-5, 1e-5), (5e-3, 1e-3, 1e-4)],
+                         ids=["1ms", "5ms-cosim-default"])
+def test_rk4_steps_agree_with_simulate_on_a_sine(h, rtol, rtol_force):
+    """RK4 at 1 ms and at the co-simulation's default 5 ms, with flow reversals, on a 20 mm,
+    5 Hz sine: far faster bellow motion than in the vehicle runs."""
     circuit = Circuit(table1_components(True), k_W_per_K=100.0)
     x0 = circuit.initial_state()
     motion = rig.sine_motion(0.02, 5.0)
     ref = simulate(circuit, x0, 0.4, motion, rtol=1e-11).y[:, -1]
-    x = advance(circuit, x0, 0.0, 0.4, motion)
+    x = advance(circuit, x0, 0.0, 0.4, motion, h_max_s=h)
     lay = circuit.layout
     # the 4th-order error of a smooth problem at h = 1 ms is ~1e-9; reversal steps add O(h^2..h^4)
-    # terms; 1e-5 relative (0.4 N of force, 3 mK) is what a co-simulation needs and leaves margin.
-    np.testing.assert_allclose(x[:lay.q.start], ref[:lay.q.start], rtol=1e-5)
+    # terms. 1 ms: 1e-5 relative (0.4 N of force, 3 mK). 5 ms: the pipe mode (omega h ~ 0.3) and
+    # the reversals cost more, 1e-3 on the states and 1e-4 (4 N) on the force, still far below
+    # the 100 N scale of the wheel-load changes the vehicle runs resolve.
+    np.testing.assert_allclose(x[:lay.q.start], ref[:lay.q.start], rtol=rtol)
     F = circuit.bellow_forces_N(x, np.zeros(1)), circuit.bellow_forces_N(ref, np.zeros(1))
-    assert abs(F[0][0] - F[1][0]) < 1e-5 * abs(F[1][0])
+    assert abs(F[0][0] - F[1][0]) < rtol_force * abs(F[1][0])
 
 
 # =============================================================================

@@ -153,9 +153,9 @@ def test_amplitude_beyond_the_bellow_stroke_is_rejected(tmp_path):
 
 
 def test_a_run_that_diverges_keeps_its_results_and_says_where(tmp_path, capsys):
-    """Crushing a bellow (alone) to 99.9 % of its stroke makes it stiff beyond what the integrator
-    can follow in the time given; the run must stop with a diagnosis, keep the series up to
-    there and exit 1 -- here provoked through the API, since the scenario loader refuses it."""
+    """A ramp driving a bellow (alone) beyond its stroke makes the air non-physical; the run must
+    stop with a diagnosis and keep the series up to there (the runner then reports it and the
+    CLI exits 1) -- provoked through the API, since the scenario loader refuses such input."""
     import numpy as np
     from pneumatics.chamber import Bellow
     from pneumatics.rig import ramp_motion, run_time_series

@@ -25,7 +25,8 @@ def test_starts_in_static_equilibrium(tmp_path):
     Q = cosim.cars[0].wheel_loads_N()
     p = s.vehicle
     weight = 9.81 * (p.carbody_mass_kg + 2 * p.bogie_mass_kg + 4 * p.wheelset_mass_kg)
-    # 1e-6 relative: the equilibrium is set analytically; only round-off separates them.
+    # 1e-6 relative, the issue's acceptance level: the equilibrium is set analytically, so only
+    # round-off (~1e-13) separates them.
     assert Q.sum() == pytest.approx(weight, rel=1e-6)
     # level track: left and right wheels of each wheelset carry the same load (round-off level)
     assert np.allclose(Q[0::2], Q[1::2], rtol=1e-9)
@@ -40,8 +41,8 @@ def test_zero_twist_gives_no_unloading(tmp_path):
     assert not diag
     Q = rec["wheel_load_N"]
     dqq = wheel_unloading(Q, static_wheel_loads(Q[0]))
-    # 1e-6: a car left at rest with its static pressures must not move; anything above
-    # round-off (~1e-12) would reveal a force imbalance or coupling drift.
+    # 1e-6 (0.03 N on a 29 kN wheel): a car left at rest with its static pressures must not
+    # move; a force imbalance or coupling drift would show at the 1e-3 level within the 2 s.
     assert np.abs(dqq).max() < 1e-6
 
 
@@ -64,7 +65,8 @@ def test_adiabatic_unloads_more_than_isothermal_and_diagonal_pattern(tmp_path):
 
 def test_macro_step_convergence(tmp_path):
     """H = 5, 2, 1, 0.5 ms approach each other. The multibody step is held at 0.5 ms in every run
-    so that only the coupling step changes (exudyn's own time-step error is a separate matter)."""
+    so that only the coupling changes: the exchange interval H and with it the pneumatic RK4
+    step min(H, 5 ms) (exudyn's own time-step error is a separate matter)."""
     results = {}
     for H in (0.005, 0.002, 0.001, 0.0005):
         s = scenario(tmp_path, k_W_per_K=[10.0], **{"solver.macro_step_s": H, "solver.mechanics_step_s": 0.0005,
