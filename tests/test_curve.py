@@ -72,3 +72,25 @@ def test_isothermal_rolls_more_without_valves(curve_runs):
     # softer isothermal bellows (A^2 p / V instead of gamma A^2 p / V): more roll (paper Fig. 9)
     assert roll_end[ks.index(float("inf"))] > roll_end[ks.index(0.0)]
 
+
+
+def test_two_point_layout():
+    """One levelling valve per bogie, driven by the mean height of both bellows, feeding the left
+    one; the cross pipe joins the bellows of a bogie whether or not the valves are connected."""
+    from pneumatics.chamber import Bellow, Tank
+    from pneumatics.circuit import Circuit
+    from pneumatics.layouts import car_circuit
+    from pneumatics.pipe import Pipe
+    from pneumatics.valves import LevellingValve
+    cross = Pipe("", "", diameter_m=0.003)
+    with_valves = car_circuit(Bellow(), Tank(), Pipe("", ""), levelling=LevellingValve(""), points=2, cross_pipe=cross)
+    assert with_valves["lv_F"].sensed == ("FL", "FR") and with_valves["lv_F"].bellow == "FL"
+    assert (with_valves["cross_R"].a, with_valves["cross_R"].b) == ("RL", "RR")
+    isolated = car_circuit(Bellow(), Tank(), Pipe("", ""), points=2, cross_pipe=cross)
+    assert "cross_F" in isolated and "lv_F" not in isolated
+    # the lever of lv_F sees the mean crushing of FL and FR: +5 mm / -5 mm -> 0, inside the dead band
+    circuit = Circuit(with_valves, k_W_per_K=0.0)
+    x = circuit.initial_state({n: 4.2e5 for n in circuit.chamber_names})
+    z = np.array([0.03, -0.03, 0.0, 0.0])          # FL compressed, FR extended: a pure roll
+    flows = dict(zip(circuit.link_names, circuit.outputs(x, z).link_flow_kg_per_s))
+    assert flows["lv_F.supply"] == 0.0 and flows["lv_F.exhaust"] == 0.0   # a two-point valve cannot level roll
