@@ -34,9 +34,9 @@ def rail_height_m(t: float) -> np.ndarray:
     return z
 
 
-def run(macro_s: float, step_s: float, horizon_s: float, reuse: bool = True) -> dict:
-    car = MetroCar(VehicleParams(), rail_height_m=rail_height_m, step_s=step_s,
-                   reuse_jacobian=reuse)
+def drive(car: MetroCar, macro_s: float, horizon_s: float, outputs=lambda car: car.wheel_loads_N()):
+    """The co-simulation master's loop with emulated bellows (F = F0 + k z, dF/dz = k): returns
+    the wall time [s] and the split of one macro-step (crushing, set forces, advance, outputs) [us]."""
     F0 = car.static_bellow_forces_N()
     k = np.full(4, K_ADIABATIC_N_PER_M)
     n = int(round(horizon_s / macro_s))
@@ -51,15 +51,21 @@ def run(macro_s: float, step_s: float, horizon_s: float, reuse: bool = True) -> 
         t2 = pc()
         car.advance((i + 1) * macro_s)
         t3 = pc()
-        car.wheel_loads_N()
+        outputs(car)
         t4 = pc()
         split += (t1 - t0, t2 - t1, t3 - t2, t4 - t3)
-    wall = pc() - start
+    return pc() - start, split / n * 1e6
+
+
+def run(macro_s: float, step_s: float, horizon_s: float, reuse: bool = True) -> dict:
+    car = MetroCar(VehicleParams(), rail_height_m=rail_height_m, step_s=step_s,
+                   reuse_jacobian=reuse)
+    wall, split_us = drive(car, macro_s, horizon_s)
     steps = horizon_s / min(step_s, macro_s)
     return {"wall_per_sim_s": wall / horizon_s,
             "newton_per_step": car._solver.it.newtonStepsCount / steps,
             "jacobians": car.jacobian_count if reuse else car._solver.it.newtonJacobiCount,
-            "split_us": split / n * 1e6}
+            "split_us": split_us}
 
 
 def main() -> None:

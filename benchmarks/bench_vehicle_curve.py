@@ -24,11 +24,11 @@ import time
 
 import numpy as np
 
+from bench_vehicle import drive  # same folder: the master's loop with emulated bellows
 from vehicle.car import MetroCar
 from vehicle.params import VehicleParams
 from vehicle.track import TrackGeometry
 
-K_ADIABATIC_N_PER_M = 243e3  # paper Table 2, bellow + tank, adiabatic
 SPEED_M_PER_S = 10.0
 HORIZON_S = 30.0
 
@@ -54,30 +54,12 @@ def run(macro_s: float, step_s: float, horizon_s: float = HORIZON_S,
             return ok
 
         car.mbs.SetPreStepUserFunction(timed)
-    F0 = car.static_bellow_forces_N()
-    k = np.full(4, K_ADIABATIC_N_PER_M)
-    n = int(round(horizon_s / macro_s))
-    split = np.zeros(4)
-    pc = time.perf_counter
-    start = pc()
-    for i in range(n):
-        t0 = pc()
-        z, _ = car.bellow_crushing()
-        t1 = pc()
-        car.set_bellow_forces(F0 + k * z, k)
-        t2 = pc()
-        car.advance((i + 1) * macro_s)
-        t3 = pc()
-        car.wheel_loads_N()
-        car.carbody_roll_rad()
-        car.carbody_lateral_m()
-        t4 = pc()
-        split += (t1 - t0, t2 - t1, t3 - t2, t4 - t3)
-    wall = pc() - start
+    wall, split_us = drive(car, macro_s, horizon_s,
+                           lambda c: (c.wheel_loads_N(), c.carbody_roll_rad(), c.carbody_lateral_m()))
     steps = horizon_s / min(step_s, macro_s)
     return {"wall_per_30s": wall / horizon_s * 30.0,
             "newton_per_step": car._solver.it.newtonStepsCount / steps,
-            "jacobians": car.jacobian_count, "split_us": split / n * 1e6,
+            "jacobians": car.jacobian_count, "split_us": split_us,
             "prestep_us": prestep[0] / max(prestep[1], 1) * 1e6,
             "roll_end_rad": car.carbody_roll_rad()}
 
