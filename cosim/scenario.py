@@ -310,6 +310,7 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", experiment, "solver", "checks"),
                path, [])
     vehicle = _vehicle(data.get("vehicle"), path)
+    _check_car_builds(vehicle, data.get("vehicle"), path)
     circuit = _car_circuit(require(data, "circuit", path, [], dict), path)
     solver = build(SolverSettings, data.get("solver"), path, ["solver"])
     if solver.coupling not in COUPLINGS:
@@ -482,6 +483,17 @@ def _vehicle(value, file) -> VehicleParams:
         merged = {**(defaults or {}), **{k: v for k, v in value.items() if k != "file"}}
         return build(VehicleParams, merged, file, ["vehicle"])
     raise ScenarioError(file, ["vehicle"], f"expected a parameter file path or a mapping, got {type(value).__name__}")
+
+
+def _check_car_builds(vehicle: VehicleParams, source, file) -> None:
+    """Build the car once (~0.1 s): constraints between parameters (e.g. the bellow's upper plate
+    above its lower one) fail here, as bad input, not later inside a worker process."""
+    from vehicle.car import MetroCar
+    try:
+        MetroCar(vehicle)
+    except ValueError as exc:
+        where = Path(file).parent / source if isinstance(source, str) else file
+        raise ScenarioError(where, ["vehicle"] if where == file else [], f"inconsistent car parameters: {exc}") from None
 
 
 def _checks(value, kind, file) -> Tuple[Check, ...]:

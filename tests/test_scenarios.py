@@ -163,3 +163,9 @@ def test_a_run_that_diverges_keeps_its_results_and_says_where(tmp_path, capsys):
     ts = run_time_series({"bellow": Bellow(p0_Pa=4e5)}, 0.0, ramp_motion(1.5 * stroke, 1.0), 2.0, 201)
     assert ts.diagnosis is not None and "t = " in ts.diagnosis and "T_K_bellow" in ts.diagnosis
     assert 0.5 < ts.t_s[-1] < 2.0 and np.all(np.isfinite(ts.force_N))
+
+
+def test_inconsistent_car_parameters_are_bad_input(tmp_path):
+    err = error_for(tmp_path, short_twist(vehicle={"file": str(SCENARIOS / "params" / "metro_car.yaml"),
+                                                   "airspring_upper_height_m": 0.5}))
+    assert err.path == "vehicle" and "airspring_upper_height_m" in err.reason
