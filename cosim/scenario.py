@@ -25,11 +25,14 @@ import yaml
 
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
-from pneumatics.circuit import Circuit, CircuitError
+from pneumatics.circuit import COMPONENT_TYPES, Circuit, CircuitError
 from pneumatics.layouts import BELLOWS, car_circuit
 from pneumatics.pipe import Pipe
+from pneumatics.rig import bellow_tank_components
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
+from vehicle.car import WHEELS, MetroCar
 from vehicle.params import VehicleParams
+from vehicle.track import TrackGeometry
 
 from .master import COUPLINGS
 from .schema import ScenarioError, build, check_keys, coerce, k_values, require
@@ -156,8 +159,7 @@ class CurveTest:
     duration_s: float = 30.0
     valve_settings: Tuple[bool, ...] = (False, True)
 
-    def track(self):
-        from vehicle.track import TrackGeometry
+    def track(self) -> TrackGeometry:
         return TrackGeometry.curve_entry(self.straight_m, self.transition_m, self.radius_m, self.arc_m,
                                          cant_rad=self.cant_rad, direction=self.direction)
 
@@ -171,7 +173,6 @@ class RigCircuit:
     p0_Pa: float
 
     def components(self, with_tank: bool = True) -> Dict[str, object]:
-        from pneumatics.rig import bellow_tank_components
         return bellow_tank_components(self.bellow, self.tank if with_tank else None, self.pipe)
 
     def initial_pressures(self, components) -> Dict[str, float]:
@@ -347,7 +348,6 @@ def _check_steps(solver: SolverSettings, duration_s: float, path) -> None:
 
 def _twist(data, path) -> TwistTest:
     twist = build(TwistTest, data, path, ["twist"])
-    from vehicle.car import WHEELS
     for i, w in enumerate(twist.raised_wheels):
         if w not in WHEELS:
             raise ScenarioError(path, ["twist", f"raised_wheels[{i}]"], f"unknown wheel {w!r} (wheels: {', '.join(WHEELS)})")
@@ -408,7 +408,6 @@ LAYOUTS = ("four_point", "two_point")
 def _explicit_components(data: Mapping, file) -> Dict[str, object]:
     """``circuit.components``: name -> {type: bellow|tank|supply|pipe|orifice|levelling_valve|...,
     parameters...}; links name the nodes they join (``a``/``b``, ``bellow``, ``supply`` ...)."""
-    from pneumatics.circuit import COMPONENT_TYPES
     comps = require(data, "components", file, ["circuit"], dict)
     out = {}
     for name, spec in comps.items():
@@ -488,7 +487,6 @@ def _vehicle(value, file) -> VehicleParams:
 def _check_car_builds(vehicle: VehicleParams, source, file) -> None:
     """Build the car once (~0.1 s): constraints between parameters (e.g. the bellow's upper plate
     above its lower one) fail here, as bad input, not later inside a worker process."""
-    from vehicle.car import MetroCar
     try:
         MetroCar(vehicle)
     except ValueError as exc:
