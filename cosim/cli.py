@@ -68,7 +68,7 @@ def _run(args) -> int:
     import dataclasses
 
     from .runner import run_scenario
-    from .scenario import CAR_KINDS, load_scenario
+    from .scenario import CAR_KINDS, CHECK_METRICS, load_scenario
     scenario = load_scenario(args.scenario, args.overrides, args.k)
     if args.jobs is not None:
         if args.jobs < 1:
@@ -76,7 +76,10 @@ def _run(args) -> int:
         if scenario.kind in CAR_KINDS:      # rig scenarios run in one process
             scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=args.jobs))
     if args.command == "check" and not scenario.checks:
-        raise ScenarioError(scenario.file, ["checks"], "no checks to evaluate: add e.g. checks: ['dqq_max <= 0.6']")
+        metrics = CHECK_METRICS.get(scenario.kind)
+        hint = (f"add e.g. checks: ['{metrics[0]} <= ...'] (metrics: {', '.join(metrics)})" if metrics
+                else f"{scenario.kind} scenarios have no checkable metrics; use 'run'")
+        raise ScenarioError(scenario.file, ["checks"], f"no checks to evaluate: {hint}")
     out = args.out or Path("results") / scenario.name
     progress = Progress(scenario.name, quiet=args.quiet)
     outcome = run_scenario(scenario, out, progress)
