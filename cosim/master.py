@@ -88,6 +88,7 @@ class CoSimulation:
         self.diagnoses: List[str] = []
         self.z, self.zd = self._crushing()
         self._supply = "supply" in circuit.node_names
+        self._bellow_chambers = [circuit.chamber_names.index(b) for b in circuit.bellow_names]
 
     def _crushing(self):
         zs, zds = [], []
@@ -137,7 +138,7 @@ class CoSimulation:
     def sample(self, record: Record) -> None:
         c = self.circuit
         out = c.outputs(self.x, self.z)
-        idx = [c.chamber_names.index(b) for b in c.bellow_names]
+        idx = self._bellow_chambers
         stopped = ~self.active
 
         def live(values):

@@ -128,7 +128,6 @@ def _stiffness(scenario: Scenario, out: Path, progress: Progress, diagnoses: Lis
                                      p0_Pa=rig.initial_pressures(comps), progress=progress)
     wall = time.perf_counter() - t0
     rows = []
-    sound = math.sqrt(AIR.gamma * AIR.R_J_per_kgK * 293.15)
     for p in points:
         rows.append({"k_W_per_K": p.k_W_per_K, "frequency_Hz": p.frequency_Hz,
                      # a case that has not stabilised gets no stiffness, only its diagnosis
@@ -137,7 +136,7 @@ def _stiffness(scenario: Scenario, out: Path, progress: Progress, diagnoses: Lis
                      "T_bellow_max_K": p.T_bellow_max_K if p.stabilised else math.nan,
                      "stabilised": p.stabilised, "periodicity_residual": p.residual,
                      "floquet_max": p.floquet_max, "cycles_to_settle": p.cycles_to_settle,
-                     "pipe_velocity_max_m_per_s": p.pipe_velocity_max_m_per_s if p.stabilised else math.nan})
+                     "pipe_mach_max": p.pipe_mach_max if p.stabilised else math.nan})
     loops = [p for p in points if p.stabilised]
     if loops:
         write_columns(out / "timeseries" / "stiffness_loops.csv", {
@@ -147,11 +146,11 @@ def _stiffness(scenario: Scenario, out: Path, progress: Progress, diagnoses: Lis
             "z_m": np.concatenate([test.amplitude_m * np.sin(2 * np.pi * p.loop_phase) for p in loops]),
             "F_bellow_N": np.concatenate([p.loop_F_N for p in loops]),
             "T_bellow_K": np.concatenate([p.loop_T_K for p in loops])})
-    fast = [p for p in points if p.stabilised and p.pipe_velocity_max_m_per_s > MACH_WARNING * sound]
+    fast = [p for p in points if p.stabilised and p.pipe_mach_max > MACH_WARNING]
     if fast:
-        worst = max(fast, key=lambda p: p.pipe_velocity_max_m_per_s)
+        worst = max(fast, key=lambda p: p.pipe_mach_max)
         progress(f"warning: in {len(fast)} cases the pipe velocity exceeds Mach {MACH_WARNING} "
-                 f"(up to {worst.pipe_velocity_max_m_per_s:.0f} m/s at {worst.frequency_Hz:g} Hz, k = {k_label(worst.k_W_per_K)}): "
+                 f"(up to Mach {worst.pipe_mach_max:.2f} at {worst.frequency_Hz:g} Hz, k = {k_label(worst.k_W_per_K)}): "
                  "the incompressible pipe law (eq. 5) is outside its validity there")
     unstable = [p for p in points if not p.stabilised]
     if unstable:

@@ -117,7 +117,7 @@ class StiffnessPoint:
     residual: float               # scaled periodicity residual
     floquet_max: float            # largest Floquet multiplier modulus (< 1: the orbit attracts)
     cycles_to_settle: float       # cycles for a disturbance to decay by 1e3 (from floquet_max)
-    pipe_velocity_max_m_per_s: float
+    pipe_mach_max: float          # largest pipe Mach number along the orbit (see pipe_mach_number)
     loop_phase: np.ndarray        # the periodic orbit, decimated: phase in [0, 1)
     loop_F_N: np.ndarray          # bellow force along it
     loop_T_K: np.ndarray          # bellow temperature along it
@@ -213,33 +213,30 @@ def _solve_with_continuation(components, k, f, x_rest, amplitude_m, n_steps, tol
     return circuit, res
 
 
-def _stiffness_points(circuit: Circuit, res, f: np.ndarray, k: float, amplitude_m: float, n_steps: int):
-    forces, temps, flows = [], [], []
+def _stiffness_points(circuit: Circuit, res, f: np.ndarray, k: np.ndarray, amplitude_m: float, n_steps: int):
+    """Eq. (9) and the record of every case along one period of its periodic state."""
+    forces, temps, mach = [], [], []
     ib = circuit.chamber_names.index(BELLOW)
     motion = sine_phase_motion(amplitude_m)
 
     def observe(tau, x):
         z, _ = motion(tau, 1.0 / f)
-        forces.append(circuit.bellow_forces_N(x, z)[0])
-        temps.append(x[circuit.layout.T][ib])
-        flows.append(np.max(np.abs(x[circuit.layout.q]), axis=0) if circuit.layout.n_pipes else np.zeros(f.size))
+        out = circuit.outputs(x, z)
+        forces.append(out.bellow_force_N[0])
+        temps.append(out.T_K[ib])
+        mach.append(pipe_mach_number(circuit, x, out))
 
     one_period(circuit, res.x0, 1.0 / f, motion, n_steps, observe)
-    F, T, q = np.array(forces), np.array(temps), np.array(flows)
+    F, T, M = np.array(forces), np.array(temps), np.array(mach)
     phase = np.arange(1, n_steps + 1) / n_steps
     keep = np.unique(np.linspace(0, n_steps - 1, 64).astype(int))     # 64 points per loop for the record
-    v_max = np.zeros(f.size)
-    if PIPE in circuit.components:
-        pipe = circuit.components[PIPE]
-        rho = np.min(circuit.outputs(res.x0, np.zeros((1, f.size))).p_Pa / (circuit.gas.R_J_per_kgK * res.x0[circuit.layout.T]), axis=0)
-        v_max = q.max(axis=0) / (rho * pipe.area_m2)
     out = []
     for i in range(f.size):
         fl = res.floquet_max[i]
         settle = math.log(1e-3) / math.log(fl) if 0.0 < fl < 1.0 else (0.0 if fl == 0.0 else math.inf)
-        out.append(StiffnessPoint(float(np.broadcast_to(k, f.shape)[i]), float(f[i]), float((F[:, i].max() - F[:, i].min()) / (2 * amplitude_m)),
+        out.append(StiffnessPoint(float(k[i]), float(f[i]), float((F[:, i].max() - F[:, i].min()) / (2 * amplitude_m)),
                                   float(F[:, i].min()), float(F[:, i].max()), float(T[:, i].mean()), float(T[:, i].max()),
-                                  bool(res.stabilised[i]), float(res.residual[i]), float(fl), settle, float(v_max[i]),
+                                  bool(res.stabilised[i]), float(res.residual[i]), float(fl), settle, float(M[:, i].max()),
                                   phase[keep], F[keep, i], T[keep, i]))
     return out
 
