@@ -150,19 +150,21 @@ def test_bellow_force_pair_lifts_the_carbody():
     assert z_cb > 0 and np.all(z < -z_cb)
 
 
-def test_force_law_is_linearised_about_the_crushing_at_call():
+def test_force_law_is_linearised_about_the_crushing_and_time_at_call():
     car = MetroCar(P, rail_height_m=raise_front_right(0.004, 0.3))
     car.advance(0.1)
     z_call, _ = car.bellow_crushing()
     F = np.array([40e3, 41e3, 42e3, 43e3])
     k = np.array([1e5, 2e5, 3e5, 4e5])
-    car.set_bellow_forces(F, k)
+    Fdot = np.array([-2e3, 1e3, 5e2, 3e3])
+    car.set_bellow_forces(F, k, Fdot)
     car.advance(0.2)
     z, _ = car.bellow_crushing()
-    force_on_bogie = np.array([car.mbs.GetObjectOutput(co, exudyn.OutputVariableType.Force)[2]
+    force_on_bogie = np.array([car.mbs.GetObjectOutput(co, exudyn.OutputVariableType.ForceLocal)[2]
                                for co in car._bellows])
-    # connector force f acts as +f on the lower plate (bogie): f_z = -F(z) pushes it down
-    assert np.allclose(-force_on_bogie, F + k * (z - z_call), rtol=1e-12, atol=1e-6)
+    # connector force f acts as +f on the lower plate (bogie): f_z = -F(t, z) pushes it down,
+    # along the bellow axis (z of the connector's mid-frame, in which z is measured too)
+    assert np.allclose(-force_on_bogie, F + Fdot * (0.2 - 0.1) + k * (z - z_call), rtol=1e-12, atol=1e-6)
     assert np.max(np.abs(z - z_call)) > 1e-4  # the test is not vacuous
 
 
@@ -268,8 +270,11 @@ def test_bellow_crushing_follows_the_front_bogie_with_held_forces():
     # heave d/2 and roll d/1.5 m, primary forces unchanged to first order) while the carbody,
     # under constant forces, stays. Lower plates at y = +-1 m therefore move by
     # d (1/2 + 1/1.5) = 1.167 d (FR, compressed) and d (1/2 - 1/1.5) = -0.167 d (FL, extended);
-    # the rear bellows do not move. Tolerance 0.1 d covers the residual bogie oscillation
-    # (8.5 Hz, primary damping only) 0.1 s after the ramp and the slow carbody sway.
+    # the rear bellows barely move. The wheelsets roll about their rail-level point (where the
+    # guidance holds them), so the front bogie also shifts laterally by z_w d/1.5 (0.29 d)
+    # and the shear springs start the carbody swaying: measured 0.16 d at the rear bellows
+    # and 0.15 d added to the front ones 0.7 s in. Tolerance 0.2 d covers that sway and the
+    # residual bogie oscillation (8.5 Hz, primary damping only) 0.1 s after the ramp.
     d = 0.002
     car = MetroCar(P, rail_height_m=raise_front_right(d, 0.4))
     car.advance(0.2)
@@ -278,4 +283,4 @@ def test_bellow_crushing_follows_the_front_bogie_with_held_forces():
     car.advance(0.5)
     z, _ = car.bellow_crushing()
     expected = np.array([0.5 - 1 / 1.5, 0.5 + 1 / 1.5, 0.0, 0.0]) * d
-    assert np.allclose(z, expected, rtol=0, atol=0.1 * d)
+    assert np.allclose(z, expected, rtol=0, atol=0.2 * d)

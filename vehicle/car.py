@@ -191,9 +191,6 @@ class MetroCar:
         self.mbs = self.SC.AddSystem()
         self._build(rail0)
         self.mbs.Assemble()
-        #: first global algebraic coordinate (Lagrange multiplier) of each guidance joint
-        self._guidance_ae = [int(self.mbs.systemData.GetObjectLTGAE(j)[0])
-                             for j in self._guidance_joints]
         self._init_solver(spectral_radius, newton_abs_tol, newton_rel_tol, reuse_jacobian)
 
         self._bellow_t = None  # time of the cached bellow crushing
@@ -215,7 +212,6 @@ class MetroCar:
         self._x0_m = start_s  # x of the car centre at t = 0 (the track starts at the origin)
         self._sampler = None
         self._canted = False
-        self._s0_tracked = self._s0_wheelset  # arc lengths evaluated every step
         if track is None:
             self._guided = v != 0.0
             return
@@ -235,8 +231,6 @@ class MetroCar:
         self._sampler = TrackSampler(track)
         self._guided = True
         self._canted = any(getattr(seg, "cant_rad", 0.0) != 0.0 for seg in track.segments)
-        if self._canted:  # the bellow axes follow the track plane under the bogie centres
-            self._s0_tracked = np.concatenate([self._s0_wheelset, start_s + self.bogie_x_m])
 
     @property
     def s_m(self) -> float:
@@ -255,8 +249,8 @@ class MetroCar:
 
     def _track_at(self, t: float) -> list[tuple[float, ...]]:
         """Track centre line (x, y, heading, cant, curvature, d(cant)/ds) under each wheelset
-        and, on canted track, each bogie centre at time t: 4 (or 6) tuples."""
-        s = (self._s0_tracked + self.speed_m_per_s * t).tolist()
+        at time t: 4 tuples."""
+        s = (self._s0_wheelset + self.speed_m_per_s * t).tolist()
         if self._sampler is None:
             return [(si, 0.0, 0.0, 0.0, 0.0, 0.0) for si in s]
         return self._sampler.at(s)
@@ -299,16 +293,17 @@ class MetroCar:
     def _add_wheelset_guidance(self, iw: int) -> None:
         """Track guidance of wheelset ``iw`` (see module doc).
 
-        ``GenericJoint`` between ground and the wheelset centre (both markers at the centre's
-        position at t = 0, p0). The joint frame is ground's rotated by the offset rotation
-        A = Rz(psi) Rx(-cant) (track heading, and the roll of the canted track plane; given to
-        exudyn as Tait-Bryan xyz angles); in that frame the constraints read
+        ``GenericJoint`` between ground and the wheelset at rail level: both markers at the
+        point midway between the wheel-rail contacts, on the track centre line, at t = 0 (p0).
+        The joint frame is ground's rotated by the offset rotation A = Rz(psi) Rx(-cant) (track
+        heading, and the roll of the canted track plane; given to exudyn as Tait-Bryan xyz
+        angles); in that frame the constraints read
             t . (p - p0) = xi(t),  l . (p - p0) = eta(t)  (t: tangent, l: lateral in the plane)
             t . e_y = 0,  t . e_z = 0  (e_y axle, e_z: wheelset axes),
-        with (xi, eta) the position, relative to p0 in that frame, of the point at the static
-        centre height z_w above the track centre line along the track plane's normal. Motion
-        along that normal and roll about t stay free. The joint's reaction acts at the centre;
-        the rails apply the lateral force at rail level, z_w lower: see :meth:`_set_rail_couples`.
+        with p the wheelset's rail-level point and (xi, eta) the position, relative to p0 in
+        that frame, of the track centre line. Motion along the track plane's normal and roll
+        about t stay free. The joint's lateral reaction acts where the rails apply it, at rail
+        level, at every instant: no couple needs adding.
         """
         mbs = self.mbs
         xi = esym.Real(f"xi{iw}", 0.0)  # [m]
@@ -321,7 +316,7 @@ class MetroCar:
         def offset(mbs, t, itemNumber, offsetUserFunctionParameters):
             return [xi, eta, zero, rx, ry, rz]
 
-        pos = [float(self.wheelset_x_m[iw]) + self._x0_m, 0.0, self._z_wheelset_m]
+        pos = [float(self.wheelset_x_m[iw]) + self._x0_m, 0.0, 0.0]
         joint = mbs.CreateGenericJoint(itemNumbers=[self._ground, self._wheelsets[iw]],
                                        position=pos, constrainedAxes=[1, 1, 0, 0, 1, 1],
                                        show=False)
@@ -330,13 +325,8 @@ class MetroCar:
             mbs.SetObjectParameter(joint, "offsetUserFunction", fn)
             self._sym += [fn, zero]
         if iw == 0:
-            self._guidance_vars, self._guidance_joints = [], []
-            self._rail_couple_loads = [mbs.CreateTorque(itemNumber=w, loadVector=[0.0, 0.0, 0.0],
-                                                        show=False) for w in self._wheelsets]
+            self._guidance_vars = []
         self._guidance_vars.append((xi, eta, rx, ry, rz))
-        self._guidance_joints.append(joint)
-        if iw == 0:
-            self._joint_frame = [((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))] * 4
 
     def _add_primary(self, iw: int) -> None:
         """Left and right axlebox springs between bogie frame and wheelset ``iw``.
@@ -372,51 +362,47 @@ class MetroCar:
         return lower, upper
 
     def _add_airspring(self, k: int) -> None:
-        """Bellow ``k``: axial force law (symbolic, along the bellow axis n) and shear
-        stiffness in x and y (intrinsic: mid-frame of bogie and carbody, at the midpoint)."""
+        """Bellow ``k``: one intrinsic ``RigidBodySpringDamper`` between the lower plate (bogie)
+        and the upper plate (carbody) carrying the axial force law and the shear stiffness.
+
+        Intrinsic formulation: the displacement d = p_upper - p_lower is measured in the
+        mid-frame J between bogie frame and carbody, and the force is applied at the midpoint of
+        the two plate centres on both bodies, so the pair is collinear at every instant (no end
+        moments to add). In J the crushing is z = h0 - d_z (h0: nominal bellow height), the
+        axial force F(t, z) = F_n + dF/dt (t - t_n) + dF/dz (z - z_n) pushes the carbody up along
+        J's z axis (the bellow axis: the mean of the two plates' normals), and the shear springs
+        act on d_x, d_y. The connector force f enters the left-hand side like K u: it acts as
+        -f on the carbody (marker 1) and +f on the bogie, hence f = (k_s d_x, k_s d_y, -F)."""
         p, mbs = self.params, self.mbs
         bogie = self._bogies[k // 2]
         lower, upper = self._bellow_plates(k)
-        F = esym.Real(f"F{k}", self._F_static_N)  # force at z = z0 [N]
+        F = esym.Real(f"F{k}", self._F_static_N)  # force at t_n and z_n [N]
         K = esym.Real(f"K{k}", 0.0)  # dF/dz [N/m]
-        z0 = esym.Real(f"z0_{k}", 0.0)  # crushing at the last set_bellow_forces [m]
-        if k == 0:  # bellow axis n per bogie: the track plane's normal (module doc)
-            self._axis_vars = [tuple(esym.Real(f"n{c}{ib}", 1.0 if c == "z" else 0.0)
-                                     for c in "xyz") for ib in range(2)]
-            self._axis_now = [((0.0, 0.0, 1.0), (0.0, 0.0, 0.0))] * 2  # (n, dn/dt) per bogie
-        nx, ny, nz = self._axis_vars[k // 2]
-        h0 = self._bellow_height_m
+        Fdot = esym.Real(f"Fdot{k}", 0.0)  # dF/dt at constant crushing [N/s]
+        z0 = esym.Real(f"z0_{k}", 0.0)  # crushing z_n at the last set_bellow_forces [m]
+        if k == 0:
+            self._t_set = esym.Real("t_n", 0.0)  # time t_n of the last set_bellow_forces [s]
+        tn = self._t_set
+        h0 = esym.Real(self._bellow_height_m)
+        ks = esym.Real(p.bellow_shear_stiffness_N_per_m)
+        zero = esym.Real(0.0)
 
-        # displacement d = p_upper - p_lower - offset, offset = nominal height h0 e_z: crushing
-        # z = h0 - (d + h0 e_z) . n (= -d_z for n = e_z, exactly); the connector force f acts as
-        # -f on the upper plate (carbody), +f on the lower (bogie)
-        def bellow_force(mbs, t, itemNumber, displacement, velocity, stiffness, damping, offset):
-            z = h0 * (1.0 - nz) - (displacement[0] * nx + displacement[1] * ny
-                                   + displacement[2] * nz)
-            f = F + K * (z - z0)
-            return [-f * nx, -f * ny, -f * nz]
+        def bellow_force(mbs, t, itemNumber, displacement, rotation, velocity, angularVelocity,
+                         stiffness, damping, rotJ0, rotJ1, offset):
+            z = h0 - displacement[2]
+            f = F + Fdot * (t - tn) + K * (z - z0)
+            return [ks * displacement[0], ks * displacement[1], -f, zero, zero, zero]
 
-        co = mbs.CreateCartesianSpringDamper(
+        co = mbs.CreateRigidBodySpringDamper(
             itemNumbers=[bogie, self._carbody], localPosition0=lower, localPosition1=upper,
-            offset=[0.0, 0.0, self._bellow_height_m], show=False)
-        fn = CreateSymbolicUserFunction(mbs, bellow_force, "springForceUserFunction", co)
-        mbs.SetObjectParameter(co, "springForceUserFunction", fn)
-        ks = p.bellow_shear_stiffness_N_per_m
-        mbs.CreateRigidBodySpringDamper(
-            itemNumbers=[bogie, self._carbody], localPosition0=lower, localPosition1=upper,
-            stiffness=np.diag([ks, ks, 0.0, 0.0, 0.0, 0.0]), damping=np.zeros((6, 6)),
-            offset=[0.0, 0.0, self._bellow_height_m, 0.0, 0.0, 0.0],
             useIntrinsicFormulation=True, show=False)
+        fn = CreateSymbolicUserFunction(mbs, bellow_force, "springForceTorqueUserFunction", co)
+        mbs.SetObjectParameter(co, "springForceTorqueUserFunction", fn)
         if k == 0:
             self._bellows, self._bellow_vars = [], []
-            # end moments of the vertical force pairs (see module doc), updated every step
-            self._end_moment_loads = [mbs.CreateTorque(itemNumber=b, loadVector=[0.0, 0.0, 0.0],
-                                                       show=False)
-                                      for b in (self._carbody, *self._bogies)]
         self._bellows.append(co)
-        self._bellow_vars.append((F, K, z0))
-        self._force_law = [(self._F_static_N, 0.0, 0.0)] * (k + 1)  # (F, dF/dz, z0) as set
-        self._sym.append(fn)
+        self._bellow_vars.append((F, K, Fdot, z0))
+        self._sym += [fn, h0, ks, zero]
 
     def _add_bumpstop(self, ib: int) -> None:
         """Lateral bumpstop of bogie ``ib`` (see module doc): lateral force beyond the
@@ -513,99 +499,24 @@ class MetroCar:
                 if self._canted:
                     rx.SetValue(0.0)
                     ry.SetValue(0.0)
-                self._joint_frame[iw] = ((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0))
                 continue
             # A = Rz(psi) Rx(g), g = -cant = Rx(a) Ry(b) Rz(psi'):
-            # A = [[c, -s cg, s sg], [s, c cg, -c sg], [0, sg, cg]]; target point
-            # (x, y, 0) + z_w n (n = A e_z), p0 = (x0, 0, z_w): A^T (target - p0) =
-            # A^T (dx, y, 0) + (0, 0, z_w) - z_w A^T e_z
+            # A = [[c, -s cg, s sg], [s, c cg, -c sg], [0, sg, cg]]; target point (x, y, 0) on
+            # the centre line at rail level, p0 = (x0, 0, 0): A^T (target - p0) = A^T (dx, y, 0)
             cg, sg = math.cos(cant), -math.sin(cant)
             xi.SetValue(c * dx + s * y)
-            eta.SetValue(-s * cg * dx + c * cg * y - self._z_wheelset_m * sg)
+            eta.SetValue(-s * cg * dx + c * cg * y)
             rx.SetValue(math.atan2(c * sg, cg))
             ry.SetValue(math.asin(s * sg))
             rz.SetValue(math.atan2(s * cg, c))
-            self._joint_frame[iw] = ((c, -s * cg, s * sg), (s, c * cg, -c * sg), (0.0, sg, cg))
-
-    def _set_end_moments(self) -> None:
-        """End moments of the bellow force pairs at the current state (module doc).
-
-        Each pair F n (n: bellow axis) acts at the plate centres, whose relative position is
-        d = p_upper - p_lower (connector displacement + nominal height); the couple d x F n it
-        leaves unbalanced is returned as -(d x F n) / 2 on the carbody and on the bogie frame
-        each, which puts the pair's line of action through the bellow's midpoint for both
-        bodies."""
-        get, disp = self.mbs.GetObjectOutput, _OUT.Displacement
-        h0 = self._bellow_height_m
-        cx, cy, cz = 0.0, 0.0, 0.0  # carbody
-        bogie = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
-        for k, (co, (F0, K, z0)) in enumerate(zip(self._bellows, self._force_law)):
-            nx, ny, nz = self._axis_now[k >> 1][0]
-            dx, dy, dz = get(co, disp)
-            dz += h0
-            F = F0 + K * (h0 - (dx * nx + dy * ny + dz * nz) - z0)  # force law, on the carbody
-            hF = -0.5 * F  # -(d x F n) / 2
-            mx = hF * (dy * nz - dz * ny)
-            my = hF * (dz * nx - dx * nz)
-            mz = hF * (dx * ny - dy * nx)
-            cx += mx
-            cy += my
-            cz += mz
-            tb = bogie[k >> 1]
-            tb[0] += mx
-            tb[1] += my
-            tb[2] += mz
-        set_load = self.mbs.SetLoadParameter
-        loads = self._end_moment_loads
-        set_load(loads[0], "loadVector", [cx, cy, cz])
-        set_load(loads[1], "loadVector", bogie[0])
-        set_load(loads[2], "loadVector", bogie[1])
-
-    def _set_rail_couples(self) -> None:
-        """Move the guidance reactions' line of action from the wheelset centre to rail level.
-
-        The joint applies the lateral (and longitudinal) reaction f at the wheelset centre; the
-        rails apply it at the contact points, z_w lower. The difference is the couple
-        (-z_w n) x f (n: the joint frame's z, the track plane normal), applied as a torque on
-        the wheelset, from the reaction at the start of the step. Without it the wheel loads
-        would balance an overturning moment short of sum(m a) z_w (10 kNm, 27 % in the paper's
-        curve)."""
-        lam = self.mbs.systemData.GetAECoordinates()  # joint ForceLocal = its first 3 multipliers
-        zw = self._z_wheelset_m
-        set_load = self.mbs.SetLoadParameter
-        for i0, load, A in zip(self._guidance_ae, self._rail_couple_loads, self._joint_frame):
-            # reaction on the ground marker, joint frame: (fx, fy, fz); on the wheelset
-            # (-fx, -fy, 0); couple (-z_w e_z) x (-fx, -fy, 0) = z_w (-fy, fx, 0), joint frame
-            mx, my = -zw * lam[i0 + 1], zw * lam[i0]
-            set_load(load, "loadVector", [A[0][0] * mx + A[0][1] * my,
-                                          A[1][0] * mx + A[1][1] * my,
-                                          A[2][0] * mx + A[2][1] * my])
-
-    def _set_bellow_axes(self, track_state) -> None:
-        """Bellow axes n = normal of the canted track plane at each bogie centre (and dn/dt)."""
-        v = self.speed_m_per_s
-        for ib, (_, _, psi, c, kappa, dc) in enumerate(track_state[4:6]):
-            sc, cc, sp, cp = math.sin(c), math.cos(c), math.sin(psi), math.cos(psi)
-            n = (-sc * sp, sc * cp, cc)
-            cdot, psidot = v * dc, v * kappa
-            ndot = (-cc * sp * cdot - sc * cp * psidot, cc * cp * cdot - sc * sp * psidot,
-                    -sc * cdot)
-            for var, value in zip(self._axis_vars[ib], n):
-                var.SetValue(value)
-            self._axis_now[ib] = (n, ndot)
 
     def _pre_step(self, mbs, t: float) -> bool:
-        """PreStep user function: end moments of the bellow force pairs at the start of the
-        step, guidance offsets and rail heights at the step end t, mean rail rate over the
-        step."""
-        self._set_end_moments()
-        self._set_rail_couples()  # before the joint frames move on to t
+        """PreStep user function: guidance offsets and rail heights at the step end t, mean
+        rail rate over the step."""
         state = self._track_at(t) if self._guided else None
         if self._guided:
             self._set_guidance(state)
             self._heading_now = state[0][2]
-        if self._canted:
-            self._set_bellow_axes(state)
         if self._rail_fn is None and not self._canted:
             return True  # level rails: nothing else changes
         t0 = mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
@@ -688,20 +599,28 @@ class MetroCar:
         return self._t
 
     def _bellow_state(self) -> None:
-        """Crushing and rate of the bellows at the current state (cached per time)."""
+        """Crushing and rate of the bellows at the current state (cached per time).
+
+        z = h0 - d_z with d = p_upper - p_lower in the connector's mid-frame J, the very
+        quantity the force law uses (see :meth:`_add_airspring`). Its rate is the time
+        derivative of that component: exudyn's ``VelocityLocal`` is the relative velocity
+        expressed in J, which misses the rotation of J itself, d(A^T r)/dt = A^T r' - w x d
+        (w: J's angular velocity in J, the mean of the two bodies', to second order in their
+        relative rotation)."""
         if self._bellow_t == self._t:
             return
-        get = self.mbs.GetObjectOutput
+        get, body = self.mbs.GetObjectOutput, self.mbs.GetObjectOutputBody
         h0 = self._bellow_height_m
+        w_carbody = np.asarray(body(self._carbody, _OUT.AngularVelocity))
         z, zdot = [], []
         for k, co in enumerate(self._bellows):
-            (n, ndot) = self._axis_now[k // 2]
-            d = get(co, _OUT.Displacement)  # p_upper - p_lower - h0 e_z
-            v = get(co, _OUT.Velocity)
-            # z = h0 - (d + h0 e_z) . n  (see _add_airspring)
-            z.append(h0 * (1.0 - n[2]) - (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]))
-            zdot.append(-(v[0] * n[0] + v[1] * n[1] + v[2] * n[2])
-                        - (d[0] * ndot[0] + d[1] * ndot[1] + (d[2] + h0) * ndot[2]))
+            bogie = self._bogies[k // 2]
+            d = get(co, _OUT.DisplacementLocal)
+            v = get(co, _OUT.VelocityLocal)
+            A = np.asarray(body(bogie, _OUT.RotationMatrix)).reshape(3, 3)
+            w = A.T @ (0.5 * (w_carbody + np.asarray(body(bogie, _OUT.AngularVelocity))))
+            z.append(h0 - d[2])
+            zdot.append(-(v[2] - (w[0] * d[1] - w[1] * d[0])))
         self._z, self._zdot = np.array(z), np.array(zdot)
         self._bellow_t = self._t
 
@@ -709,35 +628,42 @@ class MetroCar:
         """Bellow crushing z [m] and its rate [m/s], each (4,) in :data:`BELLOWS` order.
 
         z = nominal bellow height - (p_upper_plate - p_lower_plate) . n, n the bellow axis
-        (global z on uncanted track, see module doc), positive in compression, 0 at static
-        equilibrium on level track (bellow at nominal height). In a curve the carbody rolls
-        outward: the outer bellows are crushed (z > 0), the inner ones extend."""
+        (the z axis of the mid-frame between bogie frame and carbody, see
+        :meth:`_add_airspring`), positive in compression, 0 at static equilibrium on level
+        track (bellow at nominal height). In a curve the carbody rolls outward: the outer
+        bellows are crushed (z > 0), the inner ones extend."""
         self._bellow_state()
         return self._z.copy(), self._zdot.copy()
 
-    def set_bellow_forces(self, F_N: np.ndarray, dF_dz_N_per_m: np.ndarray | None = None) -> None:
-        """Airspring forces [N] for the following :meth:`advance`, (4,) in :data:`BELLOWS` order.
+    def set_bellow_forces(self, F_N: np.ndarray, dF_dz_N_per_m: np.ndarray | None = None,
+                          dF_dt_N_per_s: np.ndarray | None = None) -> None:
+        """Airspring force laws for the following :meth:`advance`, each (4,) in :data:`BELLOWS`
+        order.
 
-        F(z) = F_N + dF_dz (z - z_now): a force pair along the bellow axis (vertical on
-        uncanted track) pushing the carbody up and the bogie down; ``dF_dz`` [N/m] is the
-        instantaneous pneumatic stiffness (linearised implicit coupling), ``None`` = 0 (force
-        held constant). z_now is the crushing of
-        :meth:`bellow_crushing` at the current state, so pass F_N for the current state.
+        F(t, z) = F_N + dF_dt (t - t_now) + dF_dz (z - z_now): a force pair along the bellow
+        axis pushing the carbody up and the bogie down, evaluated by the multibody solver at
+        every internal step from the current state. ``dF_dz`` [N/m] is the instantaneous
+        pneumatic stiffness (linearised implicit coupling), ``dF_dt`` [N/s] the rate of the
+        slow part (air flows, heat); ``None`` = 0. t_now and z_now are :attr:`t_s` and the
+        crushing of :meth:`bellow_crushing` at the current state, so F_N is the force at the
+        current state: pass the force the previous law reached at t_now and the force stays
+        continuous in time across calls.
 
-        Note: a jump of F_N between macro-steps enters generalized-alpha with about half an
-        internal step of delay (the step starts from the old acceleration); smooth force
-        histories, as from a pneumatic model, are not affected."""
+        Note: a jump of F_N between calls enters generalized-alpha with about half an internal
+        step of delay (the step starts from the old acceleration)."""
         F = np.asarray(F_N, dtype=float).reshape(4)
         dF = np.zeros(4) if dF_dz_N_per_m is None else np.asarray(dF_dz_N_per_m, float).reshape(4)
-        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(dF))):
-            raise ValueError(f"non-finite bellow force or stiffness: F={F}, dF/dz={dF}")
+        Fdot = np.zeros(4) if dF_dt_N_per_s is None else np.asarray(dF_dt_N_per_s, float).reshape(4)
+        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(dF)) and np.all(np.isfinite(Fdot))):
+            raise ValueError(f"non-finite bellow force law: F={F}, dF/dz={dF}, dF/dt={Fdot}")
         self._bellow_state()
-        for (Fv, Kv, z0v), Fk, Kk, zk in zip(self._bellow_vars, F.tolist(), dF.tolist(),
-                                             self._z.tolist()):
+        for (Fv, Kv, Fdv, z0v), Fk, Kk, Fdk, zk in zip(self._bellow_vars, F.tolist(), dF.tolist(),
+                                                       Fdot.tolist(), self._z.tolist()):
             Fv.SetValue(Fk)
             Kv.SetValue(Kk)
+            Fdv.SetValue(Fdk)
             z0v.SetValue(zk)
-        self._force_law = list(zip(F.tolist(), dF.tolist(), self._z.tolist()))
+        self._t_set.SetValue(self._t)
 
     def advance(self, t_end_s: float) -> None:
         """Integrate from :attr:`t_s` to ``t_end_s`` [s] in equal steps <= ``step_s``."""
