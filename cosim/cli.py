@@ -1,7 +1,9 @@
-"""Command line: ``pneumorail run | check | compare``.
+"""Command line: ``pneumorail run | check | verify | compare``.
 
-Exit codes: 0 success (for ``check``: every limit holds), 1 a limit is violated or a run
-diverged, 2 bad input (the message names the file, the key path and what was expected).
+Exit codes: 0 success (for ``check``: every limit holds; for ``verify``: every estimated
+discretisation error within the scenario's ``verify.tolerance``), 1 a limit is violated, an
+error estimate exceeds its tolerance or a run diverged, 2 bad input (the message names the
+file, the key path and what was expected).
 """
 from __future__ import annotations
 
@@ -44,6 +46,15 @@ def build_parser() -> argparse.ArgumentParser:
                        help="override a scenario value, e.g. --set twist.hold_s=10 (repeatable)")
         s.add_argument("--jobs", type=int, default=None, help="parallel processes for the k cases")
         s.add_argument("--quiet", action="store_true", help="no progress lines")
+    v = sub.add_parser("verify", help="rerun with every step halved, estimate the discretisation error (Richardson)")
+    v.add_argument("scenario", type=Path, help="scenario YAML file (twist or curve_entry)")
+    v.add_argument("--levels", type=int, default=None, help="number of halvings (default: the scenario's verify.levels, 2)")
+    v.add_argument("--out", type=Path, default=None, help="output folder (default: results/<scenario name>_verify)")
+    v.add_argument("--k", type=_k_list, default=None, help="override the k values [W/K], e.g. 0,inf")
+    v.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scenario value (repeatable)")
+    v.add_argument("--jobs", type=int, default=None, help="parallel processes for the k cases")
+    v.add_argument("--quiet", action="store_true", help="no progress lines")
     c = sub.add_parser("compare", help="overlay the results of several runs")
     c.add_argument("dirs", type=Path, nargs="+", help="output folders of earlier runs")
     c.add_argument("--out", type=Path, default=Path("results/compare"), help="folder for the comparison plots")
@@ -58,23 +69,52 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             for path in compare_runs(args.dirs, args.out):
                 print(path)
             return EXIT_OK
+        if args.command == "verify":
+            return _verify(args)
         return _run(args)
     except ScenarioError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
 
-def _run(args) -> int:
+def _load(args):
+    """The validated scenario with the command line's --k, --set and --jobs applied."""
     import dataclasses
 
-    from .runner import run_scenario
-    from .scenario import CAR_KINDS, CHECK_METRICS, load_scenario
+    from .scenario import CAR_KINDS, load_scenario
     scenario = load_scenario(args.scenario, args.overrides, args.k)
     if args.jobs is not None:
         if args.jobs < 1:
             raise ScenarioError(args.scenario, ["--jobs"], f"expected at least 1 process, got {args.jobs}")
         if scenario.kind in CAR_KINDS:      # rig scenarios run in one process
             scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=args.jobs))
+    return scenario
+
+
+def _verify(args) -> int:
+    from .scenario import CAR_KINDS
+    from .verify import report, verify
+    scenario = _load(args)
+    if scenario.kind not in CAR_KINDS:
+        raise ScenarioError(args.scenario, ["kind"], f"verify needs a car scenario ({', '.join(CAR_KINDS)}), "
+                                                     f"got {scenario.kind}")
+    levels = scenario.verify.levels if args.levels is None else args.levels
+    if levels < 2:
+        raise ScenarioError(args.scenario, ["--levels"], f"Richardson extrapolation needs at least 2 halvings, got {levels}")
+    out = args.out or Path("results") / f"{scenario.name}_verify"
+    found, diverged = verify(scenario, out, levels, Progress(scenario.name, quiet=args.quiet))
+    print(report(found, scenario.verify.tolerance))
+    print(f"results in {out}/")
+    if diverged:
+        print(f"DIVERGED: {diverged}")
+        return EXIT_FAILED
+    return EXIT_OK if all(e.error <= scenario.verify.tolerance for e in found) else EXIT_FAILED
+
+
+def _run(args) -> int:
+    from .runner import run_scenario
+    from .scenario import CHECK_METRICS
+    scenario = _load(args)
     if args.command == "check" and not scenario.checks:
         metrics = CHECK_METRICS.get(scenario.kind)
         hint = (f"add e.g. checks: ['{metrics[0]} <= ...'] (metrics: {', '.join(metrics)})" if metrics

@@ -1,0 +1,182 @@
+"""Solution verification: run a scenario with every step halved, estimate each metric's
+discretisation error by Richardson extrapolation.
+
+Level 0 is the scenario as given; level i divides the macro-step, the multibody step and the
+pneumatic step all by 2^i (the output interval stays, so every level samples the same instants).
+For each metric and case, with f_0 .. f_N the values from the coarsest to the finest level,
+the last three give
+
+    r = (f_{N-1} - f_{N-2}) / (f_N - f_{N-1}),   observed order p = log2(r),
+    Richardson estimate f* = f_N + (f_N - f_{N-1}) / (r - 1),
+
+and the estimated relative error of the default settings is |f_0 - f*| / S, S = |f*| or, for a
+per-wheel metric (``dqq_qs_3R``), the largest |f*| of that metric over all wheels and cases, so
+that a wheel whose value is near zero is judged on the scale of the test. The estimate is
+meaningful in the asymptotic range (r > 1, i.e. the differences shrink); otherwise no order is
+reported and the error is bounded by the spread of all levels, |f_0 - f_N| + |f_{N-1} - f_N|
+(flagged ``asymptotic = False``). Differences at the solver's noise floor (relative 1e-9) count
+as converged.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+from .results import Progress, read_rows, write_rows
+from .scenario import Scenario
+
+#: Relative differences below this are the solvers' noise floor (Newton tolerance, round-off).
+NOISE_FLOOR = 1e-9
+
+#: Headline metrics per scenario kind (summary columns); a column that is absent is skipped.
+HEADLINE_METRICS = {
+    "twist": ("dqq_max", "dqq_qs_max", "dqq_max_1L", "dqq_max_1R", "dqq_max_2L", "dqq_max_2R",
+              "dqq_max_3L", "dqq_max_3R", "dqq_max_4L", "dqq_max_4R",
+              "dqq_qs_1L", "dqq_qs_1R", "dqq_qs_2L", "dqq_qs_2R", "dqq_qs_3L", "dqq_qs_3R",
+              "dqq_qs_4L", "dqq_qs_4R"),
+    "curve_entry": ("roll_max_rad", "roll_end_rad", "roll_mean_end_rad", "air_injected_kg",
+                    "air_exhausted_kg"),
+}
+WHEEL_NAMES = ("1L", "1R", "2L", "2R", "3L", "3R", "4L", "4R")
+#: Columns that identify a case in a summary row.
+CASE_COLUMNS = ("valves", "k_W_per_K")
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One metric of one case across the levels."""
+
+    metric: str
+    case: str
+    values: Tuple[float, ...]           # level 0 (the scenario's steps) .. finest
+    order: float                        # observed order p (nan outside the asymptotic range)
+    richardson: float                   # extrapolated value f*
+    error: float                        # estimated relative error of level 0, |f_0 - f*| / |f*|
+    asymptotic: bool
+
+    def row(self) -> Dict[str, object]:
+        out: Dict[str, object] = {"metric": self.metric, "case": self.case}
+        out.update({f"level_{i}": v for i, v in enumerate(self.values)})
+        out.update({"observed_order": self.order, "richardson": self.richardson,
+                    "estimated_relative_error": self.error, "asymptotic": self.asymptotic})
+        return out
+
+
+def richardson(values: Sequence[float], metric: str = "", case: str = "") -> Estimate:
+    """Observed order, Richardson estimate and relative error of ``values[0]`` (module doc)."""
+    f = [float(v) for v in values]
+    if len(f) < 3:
+        raise ValueError("Richardson extrapolation needs at least three levels")
+    if not all(math.isfinite(v) for v in f):
+        return Estimate(metric, case, tuple(f), math.nan, math.nan, math.inf, False)
+    scale = max(abs(v) for v in f)
+    d1, d2 = f[-2] - f[-3], f[-1] - f[-2]
+    floor = NOISE_FLOOR * scale
+    if scale == 0.0 or (abs(d1) <= floor and abs(d2) <= floor):
+        best = f[-1]
+        err = 0.0 if scale == 0.0 else abs(f[0] - best) / abs(best)
+        return Estimate(metric, case, tuple(f), math.nan, best, err, True)
+    if abs(d2) > floor and d1 / d2 > 1.0:
+        r = d1 / d2
+        best = f[-1] + d2 / (r - 1.0)
+        err = abs(f[0] - best) / abs(best) if best != 0.0 else math.inf
+        return Estimate(metric, case, tuple(f), math.log2(r), best, err, True)
+    best = f[-1]
+    err = (abs(f[0] - best) + abs(f[-2] - best)) / abs(best) if best != 0.0 else math.inf
+    return Estimate(metric, case, tuple(f), math.nan, best, err, False)
+
+
+def refined(scenario: Scenario, level: int) -> Scenario:
+    """The scenario with every step divided by 2**level."""
+    s, factor = scenario.solver, 2.0 ** -level
+    solver = dataclasses.replace(s, macro_step_s=s.macro_step_s * factor,
+                                 mechanics_step_s=s.mechanics_step_s * factor,
+                                 pneumatic_step_s=s.pneumatic_step_s * factor)
+    return dataclasses.replace(scenario, solver=solver)
+
+
+def _case(row: Dict[str, str]) -> str:
+    return ", ".join(f"{c}={row[c]}" for c in CASE_COLUMNS if c in row)
+
+
+def _family(metric: str) -> str:
+    """``dqq_qs_3R`` -> ``dqq_qs``: per-wheel metrics share one scale."""
+    head, _, tail = metric.rpartition("_")
+    return head if tail in WHEEL_NAMES else metric
+
+
+def estimates(rows_per_level: Sequence[List[Dict[str, str]]], metrics: Sequence[str]) -> List[Estimate]:
+    """Richardson estimates of every metric (present in the rows) of every case."""
+    by_level = [{_case(r): r for r in rows} for rows in rows_per_level]
+    out = []
+    for metric in metrics:
+        for case, row in by_level[0].items():
+            if metric not in row:
+                continue
+            values = [float(level[case][metric]) if case in level else math.nan for level in by_level]
+            out.append(richardson(values, metric, case))
+    scale: Dict[str, float] = {}
+    for e in out:
+        if math.isfinite(e.richardson):
+            scale[_family(e.metric)] = max(scale.get(_family(e.metric), 0.0), abs(e.richardson))
+    rescaled = []
+    for e in out:
+        s = scale.get(_family(e.metric), 0.0)
+        if _family(e.metric) != e.metric and math.isfinite(e.error) and s > abs(e.richardson):
+            e = dataclasses.replace(e, error=e.error * abs(e.richardson) / s)
+        rescaled.append(e)
+    return rescaled
+
+
+def verify(scenario: Scenario, out: Path, levels: int, progress: Progress) -> Tuple[List[Estimate], Optional[str]]:
+    """Run the levels into ``out/level_<i>``; write ``verify.csv`` and add the estimates to level
+    0's ``run.json``. Returns the estimates and the diagnoses of diverged runs."""
+    from .runner import run_scenario
+    rows, diverged = [], []
+    for level in range(levels + 1):
+        variant = refined(scenario, level)
+        s = variant.solver
+        progress(f"level {level}: macro-step {s.macro_step_s:g} s, multibody {s.mechanics_step_s:g} s, "
+                 f"pneumatic {s.pneumatic_step_s:g} s")
+        folder = out / f"level_{level}"
+        outcome = run_scenario(variant, folder, progress)
+        if outcome.diverged:
+            diverged.append(f"level {level}: {outcome.diverged}")
+        rows.append(read_rows(folder / "summary.csv"))
+    metrics = HEADLINE_METRICS.get(scenario.kind, ())
+    found = estimates(rows, metrics)
+    write_rows(out / "verify.csv", [e.row() for e in found])
+    run_json = out / "level_0" / "run.json"
+    info = json.loads(run_json.read_text())
+    info["verify"] = {"levels": levels, "tolerance": scenario.verify.tolerance,
+                      "estimates": [_jsonable(e.row()) for e in found]}
+    run_json.write_text(json.dumps(info, indent=2, allow_nan=False))
+    return found, "; ".join(diverged) or None
+
+
+def _jsonable(row: Dict[str, object]) -> Dict[str, object]:
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
+
+
+def report(found: Sequence[Estimate], tolerance: float) -> str:
+    """The estimates as a plain-text table; a line per metric and case."""
+    if not found:
+        return "(no metrics to verify)"
+    n = len(found[0].values)
+    head = (f"{'metric':<20} {'case':<28} " + " ".join(f"{f'level {i}':>12}" for i in range(n))
+            + f" {'order':>6} {'Richardson':>12} {'error':>9}")
+    lines = [head]
+    for e in found:
+        order = "  -   " if math.isnan(e.order) else f"{e.order:6.2f}"
+        flag = "" if e.error <= tolerance else "  > tolerance"
+        flag += "" if e.asymptotic else "  (not asymptotic)"
+        lines.append(f"{e.metric:<20} {e.case:<28} " + " ".join(f"{v:12.6g}" for v in e.values)
+                     + f" {order} {e.richardson:12.6g} {100 * e.error:8.3f}%{flag}")
+    worst = max(found, key=lambda e: e.error)
+    lines.append(f"largest estimated error {100 * worst.error:.3f} % ({worst.metric}, {worst.case}); "
+                 f"tolerance {100 * tolerance:g} %")
+    return "\n".join(lines)
