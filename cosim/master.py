@@ -77,6 +77,10 @@ class Record:
     air_to_atmosphere_kg: List[np.ndarray] = field(default_factory=list)  # (cases,)
     link_flow_kg_per_s: List[np.ndarray] = field(default_factory=list)  # (links, cases), a -> b
     total_mass_kg: List[np.ndarray] = field(default_factory=list)       # (cases,) air in all chambers
+    valve_supply_air_kg: List[np.ndarray] = field(default_factory=list)   # (valves, cases) cumulative
+    valve_exhaust_air_kg: List[np.ndarray] = field(default_factory=list)  # (valves, cases) cumulative
+    valve_supply_open_s: List[np.ndarray] = field(default_factory=list)   # (valves, cases) cumulative
+    valve_exhaust_open_s: List[np.ndarray] = field(default_factory=list)  # (valves, cases) cumulative
 
     def arrays(self) -> Dict[str, np.ndarray]:
         return {name: np.asarray(values) for name, values in vars(self).items()}
@@ -179,6 +183,11 @@ class CoSimulation:
         record.air_to_atmosphere_kg.append(live(-c.mass_from(self.x, "atmosphere")))
         record.link_flow_kg_per_s.append(live(out.link_flow_kg_per_s))
         record.total_mass_kg.append(live(c.total_mass_kg(self.x)))
+        air, open_s = c.valve_air_kg(self.x), c.valve_open_time_s(self.x)
+        record.valve_supply_air_kg.append(live(air.supply))
+        record.valve_exhaust_air_kg.append(live(air.exhaust))
+        record.valve_supply_open_s.append(live(open_s.supply))
+        record.valve_exhaust_open_s.append(live(open_s.exhaust))
 
     def run(self, t_end_s: float, output_interval_s: float,
             progress: Optional[Callable[[str, bool], None]] = None) -> tuple[Record, Optional[str]]:

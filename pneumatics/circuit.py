@@ -16,16 +16,34 @@ State vector (one column per independent case when batched; see :class:`StateLay
 ``heat_in``        cumulative heat into all chambers from the atmosphere [J] (eq. 8)
 ``work_in``        cumulative work done on the gas by the bellows, -int p dV [J]
 ``enthalpy_in``    cumulative enthalpy brought in from boundary nodes [J]
+``open_time``      cumulative time each levelling/safety valve side has been open
+                   (conductance > 0) [s]: supply sides, then exhaust sides, in the
+                   order of :attr:`Circuit.valve_names` (2 per valve; absent without valves)
+``valve_signal``   states of the valves' response dynamics [m] (absent unless a valve sets
+                   ``hysteresis_m``, ``delay_s`` or ``lag_s``): the play outputs u_p of
+                   the valves with a play, then the delay-chain stages of the valves with a
+                   delay (valve by valve, input side first), then the lagged lever u_f of
+                   the valves with a lag; each group in the order of ``valve_names``
 =================  =========================================================
 
+The groups up to ``enthalpy_in`` sit where they always did: the valve groups are appended, so a
+circuit without valves has exactly its former layout, and one with default (instantaneous)
+valves only gains the open-time accumulators at the end (its other derivatives are unchanged
+bit for bit). The mass through each side of a valve is ``mass_through`` of the links
+``<valve>.supply`` (supply -> bellow) and ``<valve>.exhaust`` (bellow -> exhaust); see
+:meth:`Circuit.valve_air_kg` and :meth:`Circuit.valve_open_time_s`. The valve-signal states are
+physical states but lie outside the ``n_dynamic`` prefix (the periodic solver, run on rig
+circuits without valves, resets everything after that prefix to 0: valves at rest at z = 0).
+
 Inputs: the crushing z [m] (positive in compression) and its rate of every bellow, in the order
-of :attr:`Circuit.bellow_names`. Every array may carry a trailing "case" axis so that many
+of :attr:`Circuit.bellow_names`; the rate must be the derivative of z (it drives the bellow's
+work p dV and the valves' play). Every array may carry a trailing "case" axis so that many
 cases (e.g. several k values or frequencies) are integrated as one vectorised system.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Mapping, Optional, Sequence
+from typing import Mapping, NamedTuple, Optional, Sequence
 
 import numpy as np
 
@@ -36,7 +54,7 @@ from .gas import AIR, Gas
 from .orifice import Orifice, orifice_flow_kg_per_s
 from .pipe import Pipe, pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
 from .valves import (DifferentialPressureValve, LevellingValve, SafetyValve,
-                     differential_valve_flow_kg_per_s, lever_conductance)
+                     differential_valve_flow_kg_per_s, lag_rate, lever_conductance, play_output, play_rate)
 
 #: YAML ``type`` name -> component class.
 COMPONENT_TYPES = {
@@ -74,11 +92,13 @@ class CircuitDiverged(RuntimeError):
 
 @dataclass(frozen=True)
 class StateLayout:
-    """Where each group of states sits in the state vector."""
+    """Where each group of states sits in the state vector (order: see the module docstring)."""
 
     n_chambers: int
     n_pipes: int
     n_links: int
+    n_valves: int = 0
+    n_valve_states: int = 0
 
     @property
     def m(self) -> slice:
@@ -111,13 +131,34 @@ class StateLayout:
         return self.heat_in + 2
 
     @property
+    def open_time(self) -> slice:
+        """Open time of each valve side: supply sides of all valves, then exhaust sides."""
+        start = self.heat_in + 3
+        return slice(start, start + 2 * self.n_valves)
+
+    @property
+    def valve_signal(self) -> slice:
+        start = self.heat_in + 3 + 2 * self.n_valves
+        return slice(start, start + self.n_valve_states)
+
+    @property
     def size(self) -> int:
-        return self.heat_in + 3
+        return self.heat_in + 3 + 2 * self.n_valves + self.n_valve_states
 
     @property
     def n_dynamic(self) -> int:
-        """States that describe the physical condition (m, T, q); the rest are accumulators."""
+        """The prefix of states that describe the physical condition (m, T, q); the accumulators
+        follow, then the valve-signal states (physical too, but outside this prefix so that the
+        former layout is kept; see the module docstring)."""
         return 2 * self.n_chambers + self.n_pipes
+
+
+class ValveSides(NamedTuple):
+    """A per-valve quantity for each side: arrays (valves[, cases]) in the order of
+    :attr:`Circuit.valve_names`."""
+
+    supply: np.ndarray
+    exhaust: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -143,6 +184,17 @@ def _table_groups(tables):
 
 def _column(values) -> np.ndarray:
     return np.asarray(values, dtype=float).reshape(-1, 1)
+
+
+def _rows(indices):
+    """Row indices as a slice when they are evenly spaced (a cheap view), else as an index array."""
+    idx = np.asarray(indices, dtype=int)
+    if idx.size == 0:
+        return slice(0, 0)
+    step = int(idx[1] - idx[0]) if idx.size > 1 else 1
+    if step > 0 and np.array_equal(idx, idx[0] + step * np.arange(idx.size)):
+        return slice(int(idx[0]), int(idx[-1]) + 1, step)
+    return idx
 
 
 class Circuit:
@@ -258,7 +310,9 @@ class Circuit:
         self._a = np.array([e[0] for e in ends], dtype=int)
         self._b = np.array([e[1] for e in ends], dtype=int)
         nc, nl = len(self.chamber_names), len(ends)
-        self.layout = StateLayout(nc, len(pipes), nl)
+        n_valve_states = self._compile_valve_dynamics([comps[n] for n in valves])
+        self.layout = StateLayout(nc, len(pipes), nl, len(valves), n_valve_states)
+        self.valve_names = valves
         self.pipe_names = pipes
         self._incidence = np.zeros((nc, nl))
         self._boundary_sign = np.zeros(nl)
@@ -284,12 +338,14 @@ class Circuit:
         self._pipe_a, self._pipe_b = self._a[self._sl_pipe], self._b[self._sl_pipe]
         lay = self.layout
         self._s_m, self._s_T, self._s_q, self._s_through = lay.m, lay.T, lay.q, lay.mass_through
+        self._s_open, self._s_valve = lay.open_time, lay.valve_signal
         self._pipe_L = _column([comps[n].length_m for n in pipes])
         self._pipe_A = _column([comps[n].area_m2 for n in pipes])
         self._pipe_K = _column([comps[n].loss_coefficient for n in pipes])
         self._qs_A = _column([comps[n].area_m2 for n in qs_pipes])
         self._qs_K = _column([comps[n].loss_coefficient for n in qs_pipes])
         self._or_C = _column([comps[n].C_m3_per_sPa for n in orifices])
+        self._n_orifices = n_or
         self._dpv = [comps[n] for n in dpvs]
         self._valves = [comps[n] for n in valves]
         self._b_crit = _column([comps[n].b_critical for n in orifices] +
@@ -302,6 +358,31 @@ class Circuit:
             sensed = comps[n].sensed_bellows
             for s in sensed:
                 self._lever[i, self._bellow_index(n, "sensed", s)] += comps[n].lever_gain / len(sensed)
+        self._lever_play = self._lever[self._play_rows]
+
+    def _compile_valve_dynamics(self, valves) -> int:
+        """Index the valve-signal states (see the module docstring); returns their number.
+
+        Play states first, then the delay stages, then the lag states; each group gathers the
+        valves that have that element, so that one array operation serves them all (rows are
+        slices when they are evenly spaced, as when every valve comes from one template)."""
+        play = [i for i, v in enumerate(valves) if v.hysteresis_m > 0.0]
+        delay = [i for i, v in enumerate(valves) if v.delay_s > 0.0]
+        lag = [i for i, v in enumerate(valves) if v.lag_s > 0.0]
+        self._valve_dynamics = bool(play or delay or lag)
+        self._n_play, self._n_delay, self._n_lag = len(play), len(delay), len(lag)
+        self._play_rows, self._delay_rows, self._lag_rows = (_rows(r) for r in (play, delay, lag))
+        self._play_half = _column([0.5 * valves[i].hysteresis_m for i in play])
+        stages = [valves[i].delay_stages for i in delay]
+        self._delay_stage_valve = np.repeat(np.array(delay, dtype=int), stages)   # owner of each stage
+        starts = np.cumsum([0] + stages)
+        self._delay_first, self._delay_last = _rows(starts[:-1]), _rows(starts[1:] - 1)
+        self._delay_tau = _column([valves[i].delay_s / valves[i].delay_stages for i in self._delay_stage_valve])
+        self._lag_tau = _column([valves[i].lag_s for i in lag])
+        self._sl_play = slice(0, len(play))
+        self._sl_delay = slice(len(play), len(play) + int(starts[-1]))
+        self._sl_lag = slice(self._sl_delay.stop, self._sl_delay.stop + len(lag))
+        return self._sl_lag.stop
 
     @staticmethod
     def _check_link_values(name: str, comp) -> None:
@@ -313,6 +394,14 @@ class Circuit:
                 raise CircuitError([name, field], f"must be > 0, got {getattr(comp, field)}")
         if isinstance(comp, (Orifice, LevellingValve)) and not 0.0 <= comp.b_critical < 1.0:
             raise CircuitError([name, "b_critical"], f"must be in [0, 1), got {comp.b_critical}")
+        if isinstance(comp, LevellingValve):
+            for field in ("lag_s", "delay_s", "hysteresis_m"):
+                value = getattr(comp, field)
+                if not (np.isfinite(value) and value >= 0.0):
+                    raise CircuitError([name, field], f"must be >= 0 (0: none), got {value}")
+            stages = comp.delay_stages
+            if isinstance(stages, bool) or not isinstance(stages, (int, np.integer)) or stages < 1:
+                raise CircuitError([name, "delay_stages"], f"must be an integer >= 1, got {stages!r}")
         tables = []
         if isinstance(comp, LevellingValve):
             tables = [("supply_lever_m", "supply_C_m3_per_sPa"), ("exhaust_lever_m", "exhaust_C_m3_per_sPa")]
@@ -367,8 +456,49 @@ class Circuit:
                 np.repeat(v, n_cases, axis=1) for v in (self._p_boundary, self._T_boundary, self._or_C))
         return cols
 
+    def _valve_chain(self, x2: np.ndarray, z2: np.ndarray):
+        """Lever signals (valves x cases) along the chain u -> play -> delay -> lag: (u, u_p, u_d, u_f).
+        Without valve dynamics all four are the same array u = lever @ z."""
+        u = self._lever @ z2
+        if not self._valve_dynamics:
+            return u, u, u, u
+        s = x2[self._s_valve]
+        u_p = u
+        if self._n_play:
+            u_p = u.copy()
+            u_p[self._play_rows] = play_output(s[self._sl_play], u[self._play_rows], self._play_half)
+        u_d = u_p
+        if self._n_delay:
+            u_d = u_p.copy()
+            u_d[self._delay_rows] = s[self._sl_delay][self._delay_last]
+        u_f = u_d
+        if self._n_lag:
+            u_f = u_d.copy()
+            u_f[self._lag_rows] = s[self._sl_lag]
+        return u, u_p, u_d, u_f
+
+    def _valve_signal_rates(self, x2: np.ndarray, chain, zdot2: np.ndarray) -> np.ndarray:
+        """d/dt of the valve-signal states: play (input rate = lever @ crushing rate), the delay
+        stages (each a lag driven by the stage before it, the first by u_p), the lags."""
+        u, u_p, u_d, _ = chain
+        s = x2[self._s_valve]
+        rate = np.empty_like(s)
+        if self._n_play:
+            rows = self._play_rows
+            rate[self._sl_play] = play_rate(u[rows] - s[self._sl_play], self._play_half, self._lever_play @ zdot2)
+        if self._n_delay:
+            stages = s[self._sl_delay]
+            driving = np.empty_like(stages)
+            driving[1:] = stages[:-1]
+            driving[self._delay_first] = u_p[self._delay_rows]
+            rate[self._sl_delay] = lag_rate(driving, stages, self._delay_tau)
+        if self._n_lag:
+            rate[self._sl_lag] = lag_rate(u_d[self._lag_rows], s[self._sl_lag], self._lag_tau)
+        return rate
+
     def _evaluate(self, x2: np.ndarray, z2: np.ndarray):
-        """Pressures, volumes and link flows for a 2-D state (states x cases) and crushing (bellows x cases)."""
+        """Pressures, volumes and link flows for a 2-D state (states x cases) and crushing (bellows
+        x cases); also the valves' lever chain and their conductances (supply sides, then exhaust)."""
         gas = self.gas
         m, T = x2[self._s_m], x2[self._s_T]
         V = self._V0 - self._Ez @ z2
@@ -388,8 +518,13 @@ class Circuit:
             j = self._sl_dpv.start + rows
             w[j] = differential_valve_flow_kg_per_s(p_n[a[j]], p_n[b[j]], xp, fp)
         C = [C_or]
+        chain = None
         if self._valves:
-            lever = self._lever @ z2
+            if self._valve_dynamics:
+                chain = self._valve_chain(x2, z2)
+                lever = chain[3]
+            else:
+                lever = self._lever @ z2
             for tables, sign in ((self._supply_tables, 1.0), (self._exhaust_tables, -1.0)):
                 C_side = np.empty((len(self._valves), n_cases))
                 for rows, xp, fp in tables:
@@ -399,7 +534,7 @@ class Circuit:
         if C.size:
             ia, ib = a[self._orifice_links], b[self._orifice_links]
             w[self._orifice_links] = orifice_flow_kg_per_s(C, self._b_crit, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
-        return m, T, V, p, p_n, T_n, rho_n, w
+        return m, T, V, p, p_n, T_n, rho_n, w, chain, C[self._n_orifices:]
 
     def _per_bellow(self, values, x2: np.ndarray) -> np.ndarray:
         """A bellow input as (bellows, cases); a circuit without bellows takes an empty array."""
@@ -412,7 +547,7 @@ class Circuit:
         x2 = x.reshape(lay.size, -1)
         z2, zdot2 = self._per_bellow(z_m, x2), self._per_bellow(zdot_m_per_s, x2)
         cv = self.gas.cv_J_per_kgK
-        m, T, V, p, p_n, T_n, rho_n, w = self._evaluate(x2, z2)
+        m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = self._evaluate(x2, z2)
         a, b = self._a, self._b
         Vdot = -self._Ez @ zdot2
         Hw = w * (self.gas.cp_J_per_kgK * np.where(w >= 0.0, T_n[a], T_n[b]))  # upstream total enthalpy
@@ -434,13 +569,17 @@ class Circuit:
         dx[lay.heat_in] = Qdot.sum(axis=0)
         dx[lay.work_in] = -(p * Vdot).sum(axis=0)
         dx[lay.enthalpy_in] = self._boundary_sign @ Hw
+        if self._valves:
+            np.sign(C_valve, out=dx[self._s_open])  # C >= 0 (tables checked): 1 while open, 0 when shut
+            if self._valve_dynamics:
+                dx[self._s_valve] = self._valve_signal_rates(x2, chain, zdot2)
         return dx.reshape(x.shape)
 
     def outputs(self, x, z_m) -> CircuitOutputs:
         """Pressures, temperatures, masses, volumes, link flows and bellow forces (eq. 4)."""
         x2 = x.reshape(self.layout.size, -1)
         z2 = self._per_bellow(z_m, x2)
-        m, T, V, p, _, _, _, w = self._evaluate(x2, z2)
+        m, T, V, p, _, _, _, w, _, _ = self._evaluate(x2, z2)
         F = self.bellow_forces_N(x2, z2)
         squeeze = (lambda v: v[:, 0]) if x.ndim == 1 else (lambda v: v)
         return CircuitOutputs(*(squeeze(v) for v in (p, T, m, V, w, F)))
@@ -480,6 +619,45 @@ class Circuit:
         sign = (self._a == i).astype(float) - (self._b == i).astype(float)
         return sign @ x[self.layout.mass_through]
 
+    # ----------------------------------------------------------------------------- valves
+    def valve_air_kg(self, x) -> ValveSides:
+        """Cumulative air through each valve's sides [kg], arrays (valves[, cases]): ``supply`` from
+        the supply into the bellow, ``exhaust`` from the bellow to the exhaust. Net values: a side
+        that lets air pass backwards (bellow above supply pressure) counts it negative."""
+        through = x[self.layout.mass_through][self._sl_valve]
+        nv = len(self.valve_names)
+        return ValveSides(through[:nv], through[nv:])
+
+    def valve_open_time_s(self, x) -> ValveSides:
+        """Cumulative time each valve side has been open (conductance > 0) [s], arrays
+        (valves[, cases]). Integrated with the state, so a fixed RK4 step resolves an opening or
+        closing instant to within one step."""
+        t = x[self.layout.open_time]
+        nv = len(self.valve_names)
+        return ValveSides(t[:nv], t[nv:])
+
+    def valve_lever_m(self, x, z_m) -> np.ndarray:
+        """Lever displacement each valve acts on, u_f, after play, delay and lag [m], shaped
+        (valves[, cases]) like ``x``: positive opens the supply side, negative the exhaust side."""
+        x2 = x.reshape(self.layout.size, -1)
+        u_f = self._valve_chain(x2, self._per_bellow(z_m, x2))[3]
+        return u_f[:, 0] if x.ndim == 1 else u_f
+
+    def valves_at_rest(self, x, z_m) -> np.ndarray:
+        """A copy of ``x`` whose valve-signal states are at rest at crushing ``z_m``: play, every
+        delay stage and lag equal to the lever displacement u = lever_gain x mean crushing, as if
+        the crushing had been held for ever. (Circuit.initial_state is at rest at z = 0.)"""
+        x = np.array(x, dtype=float)
+        if not self._valve_dynamics:
+            return x
+        x2 = x.reshape(self.layout.size, -1)
+        u = self._lever @ self._per_bellow(z_m, x2)
+        s = x2[self._s_valve]                         # a view: writing s writes x
+        s[self._sl_play] = u[self._play_rows]
+        s[self._sl_delay] = u[self._delay_stage_valve]
+        s[self._sl_lag] = u[self._lag_rows]
+        return x
+
     #: below this fraction of its nominal volume a chamber counts as crushed flat (non-physical)
     MIN_VOLUME_FRACTION = 1e-3
 
@@ -505,3 +683,14 @@ class Circuit:
                 state = {"case": case, "m_kg": x2[lay.m][i, case], "T_K": x2[lay.T][i, case]} if what != "pipe flow" \
                     else {"case": case, "q_kg_per_s": x2[lay.q][i, case]}
                 raise CircuitDiverged(t_s, names[i], state, f"{what} is not finite and positive")
+        bad_u = ~np.isfinite(x2[lay.valve_signal])
+        if np.any(bad_u):
+            i, case = map(int, np.argwhere(bad_u)[0])
+            raise CircuitDiverged(t_s, self._valve_of_signal_state(i),
+                                  {"case": case, "u_m": x2[lay.valve_signal][i, case]}, "valve lever signal is not finite")
+
+    def _valve_of_signal_state(self, i: int) -> str:
+        """Name of the valve that owns valve-signal state ``i``."""
+        owners = np.r_[np.arange(self.layout.n_valves)[self._play_rows], self._delay_stage_valve,
+                       np.arange(self.layout.n_valves)[self._lag_rows]]
+        return self.valve_names[int(owners[i])]
