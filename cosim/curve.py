@@ -13,10 +13,11 @@ from pneumatics.circuit import Circuit
 from vehicle.car import BELLOWS, MetroCar
 
 from .car_runs import bellow_panels, curves_per_k, record_columns, simulate
+from .criteria import window_mean
 from .plots import Panel, save_panels
 from .results import Progress, k_label, write_columns, write_rows, write_run_json
-from .runner import Outcome
-from .scenario import Scenario
+from .runner import CaseMetrics, Outcome
+from .scenario import CurveTest, Scenario
 
 #: components whose link flows are written to the time series
 VALVE_PREFIXES = ("lv_", "dpv_")
@@ -26,6 +27,30 @@ def make_car(scenario: Scenario) -> MetroCar:
     """The car running along the curve-entry track (picklable factory for cosim.car_runs)."""
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, track=scenario.curve.track(),
                     speed_m_per_s=scenario.curve.speed_m_per_s)
+
+
+def car_centre_s_m(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
+    """Arc length [m] of the car centre (midway between the bogie centres) at times ``t_s``:
+    start_s + v t, with MetroCar's default start, the rear wheelset at s = 0, i.e. the car centre
+    at (bogie centre distance + wheelbase) / 2."""
+    p = scenario.vehicle
+    return 0.5 * (p.bogie_centre_distance_m + p.wheelbase_m) + scenario.curve.speed_m_per_s * np.asarray(t_s, dtype=float)
+
+
+def track_roll_rad(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
+    """Roll [rad] of the track plane at the car centre, in the carbody roll's convention (right
+    hand about the forward axis, positive = left side up). ``TrackGeometry.cant_rad(s)`` is
+    signed like the curvature, positive raising the right rail (a left-hand curve's outer rail;
+    MetroCar._rail_at lowers the left rail and raises the right one by b sin(cant)): the plane's
+    roll is minus it."""
+    return -np.asarray(scenario.curve.track().cant_rad(car_centre_s_m(scenario, t_s)), dtype=float)
+
+
+def relative_roll_rad(scenario: Scenario, rec: Dict[str, np.ndarray]) -> np.ndarray:
+    """(samples, cases) carbody roll relative to the track plane at the car centre: the absolute
+    roll (``MetroCar.carbody_roll_rad``) minus the plane's roll, i.e. roll + cant. On uncanted
+    track it is the absolute roll."""
+    return rec["roll_rad"] - track_roll_rad(scenario, rec["t_s"])[:, None]
 
 
 def with_valves(scenario: Scenario, valves: bool) -> Scenario:
@@ -45,34 +70,51 @@ def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
     curve = scenario.curve
     progress(f"curve entry at {curve.speed_m_per_s:g} m/s: {curve.straight_m:g} m straight, {curve.transition_m:g} m "
              f"transition, R = {curve.radius_m:g} m; {len(scenario.k_W_per_K)} k values x valves {curve.valve_settings}")
-    rows, runs, diagnoses = [], {}, []
+    rows, runs, diagnoses, cases = [], {}, [], []
     for valves in curve.valve_settings:
         ks, rec, diag, links = simulate_curve(scenario, valves, progress=not progress.quiet)
+        rec = {**rec, "roll_rel_rad": relative_roll_rad(scenario, rec)}
         runs[valves] = (ks, rec)
         diagnoses += [f"valves {'on' if valves else 'off'}: {d}" for d in diag]
         tag = "on" if valves else "off"
         for j, k in enumerate(ks):
-            rows.append(_summary_row(valves, k, rec, j))
+            rows.append(_summary_row(valves, k, rec, j, curve))
+            cases.append(CaseMetrics(k, valves, {m: rows[-1][m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}))
             cols = record_columns(rec, j)
+            cols["roll_track_plane_rad"] = track_roll_rad(scenario, rec["t_s"])
+            cols["roll_carbody_rel_track_rad"] = rec["roll_rel_rad"][:, j]
             cols.update({f"q_{name}_kg_per_s": rec["link_flow_kg_per_s"][:, i, j]
                          for i, name in enumerate(links) if name.startswith(VALVE_PREFIXES)})
             write_columns(out / "timeseries" / f"curve_valves={tag}_k={k_label(k)}.csv", cols)
     write_rows(out / "summary.csv", rows)
     _plots(out, runs)
     diverged = "; ".join(diagnoses) or None
-    metrics = {"roll_max_rad": max(r["roll_max_rad"] for r in rows),
-               "air_injected_kg": max(r["air_injected_kg"] for r in rows)} if rows else {}
-    write_run_json(out, scenario, time.perf_counter() - t0, {"diverged": diverged, "metrics": metrics})
-    shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_end_rad", "air_injected_kg", "air_exhausted_kg")
-    return Outcome(scenario, [{c: r[c] for c in shown} for r in rows], metrics, diverged)
+    metrics = {m: _largest(r[m] for r in rows) for m in ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg",
+                                                         "air_exhausted_kg")} if rows else {}
+    write_run_json(out, scenario, time.perf_counter() - t0, {"diverged": diverged, "metrics": metrics,
+                                                             "window_s": curve.window})
+    shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg")
+    return Outcome(scenario, [{c: r[c] for c in shown} for r in rows], metrics, diverged, cases)
 
 
-def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int) -> Dict[str, object]:
-    roll = rec["roll_rad"][:, j]
-    row = {"valves": valves, "k_W_per_K": k, "roll_max_rad": float(np.abs(roll).max()), "roll_end_rad": float(roll[-1]),
+def _largest(values) -> float:
+    """The largest value; NaN if any is NaN (a diverged case)."""
+    values = list(values)
+    return float("nan") if any(v != v for v in values) else max(values)
+
+
+def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int, curve: CurveTest) -> Dict[str, object]:
+    """Roll relative to the track plane (largest |roll| over the run, and its mean over the final
+    window: the steady roll in the arc, not wherever the ~1 Hz sway is at the last sample), air
+    exchanged (cumulative: its last sample), bellow crushing (final-window means)."""
+    t = rec["t_s"]
+    roll = rec["roll_rel_rad"][:, j]
+    row = {"valves": valves, "k_W_per_K": k, "roll_max_rad": float(np.abs(roll).max()),
+           "roll_mean_end_rad": float(window_mean(t, roll, curve.window)),
            "air_injected_kg": float(rec["air_from_supply_kg"][-1, j]),
            "air_exhausted_kg": float(rec["air_to_atmosphere_kg"][-1, j]) + 0.0}  # no "-0"
-    row.update({f"z_end_{b}_m": float(rec["crushing_m"][-1, i, j]) for i, b in enumerate(BELLOWS)})
+    z = window_mean(t, rec["crushing_m"][:, :, j], curve.window)
+    row.update({f"z_mean_end_{b}_m": float(z[i]) for i, b in enumerate(BELLOWS)})
     row["T_bellow_min_K"] = float(rec["bellow_T_K"][:, :, j].min())
     row["T_bellow_max_K"] = float(rec["bellow_T_K"][:, :, j].max())
     # closes to the integrator's round-off: air in the chambers changes only by what crosses the boundary
@@ -85,7 +127,7 @@ def _plots(out: Path, runs) -> None:
     panels: List[Panel] = []
     for valves, (ks, rec) in runs.items():
         per_k = curves_per_k(rec["t_s"], ks)
-        panels.append(Panel(per_k(rec["roll_rad"], 1e3), "time t [s]", "carbody roll [mrad]",
+        panels.append(Panel(per_k(rec["roll_rel_rad"], 1e3), "time t [s]", "carbody roll to the track plane [mrad]",
                             f"valves {'connected' if valves else 'disconnected'}"))
     save_panels(out / "fig9_roll.png", panels, "Carbody roll entering a curve (paper Fig. 9)", ncols=len(panels))
     for valves, (ks, rec) in runs.items():

@@ -35,6 +35,7 @@ from vehicle.params import VehicleParams
 from vehicle.track import TrackGeometry
 
 from .master import COUPLINGS
+from .results import k_label
 from .schema import ScenarioError, build, check_keys, coerce, k_values, require
 
 RIG_KINDS = ("rig_ramp", "rig_sine", "rig_stiffness", "rig_table2")
@@ -96,6 +97,23 @@ class TwistTest:
     base length 2a (here the bogie centre distance): 7 permille for 2a <= 4 m, 20/2a + 2 permille
     for 4 m < 2a <= 20 m, 3 permille above (the rule commonly quoted from EN 14363; set
     ``twist_per_mille`` to override it).
+
+    EN 14363 twists the car over both bases together: the carbody twist g* over the bogie
+    centre distance 2a* and the bogie twist g+ over the wheelbase 2a+. ``bogie_base_m`` (2a+,
+    the car's wheelbase) switches the bogie twist on: the front bogie's rails on the raised side
+    (``raised_wheels`` must then be that side of the front bogie, e.g. [1R, 2R]) are in addition
+    twisted by h+ = g+ x 2a+ about the bogie centre, leading wheelset + h+/2, trailing - h+/2
+    (``bogie_twist_per_mille``, default the EN 14363 limit for 2a+); see
+    :func:`cosim.twist.rail_heights` for the track geometry. Without it: Fig. 7, the carbody twist
+    alone.
+
+    ``window_s``: final window over which the quasi-static end values are averaged (default 5 s,
+    or the whole hold if that is shorter); ``settle_drift``: the case counts as settled when every
+    wheel's ΔQ/Q0 drifts by less than that over the final window: its mean over the final window
+    differs from its mean over the window before by less (an undamped ~1 Hz sway left in the
+    window moves the mean by at most 4 b / (w W) of its amplitude b).
+    ``valve_settings``: run with the levelling valves isolated (false) and/or connected (true);
+    null: one run as ``circuit.valves`` says.
     """
 
     base_m: float = 10.0
@@ -103,6 +121,11 @@ class TwistTest:
     raised_wheels: Tuple[str, ...] = ("1R", "2R")
     ramp_s: float = 5.0
     hold_s: float = 35.0
+    bogie_base_m: Optional[float] = None
+    bogie_twist_per_mille: Optional[float] = None
+    window_s: Optional[float] = None
+    settle_drift: float = 1e-3
+    valve_settings: Optional[Tuple[bool, ...]] = None
 
     @property
     def twist(self) -> float:
@@ -115,8 +138,31 @@ class TwistTest:
         return self.twist * self.base_m
 
     @property
+    def bogie_twist(self) -> float:
+        """g+ [-]: 0 without ``bogie_base_m``."""
+        if self.bogie_base_m is None:
+            return 0.0
+        if self.bogie_twist_per_mille is not None:
+            return self.bogie_twist_per_mille / 1000.0
+        return en14363_twist_limit(self.bogie_base_m)
+
+    @property
+    def bogie_height_m(self) -> float:
+        """h+ = g+ x 2a+ [m]: the height difference between the front bogie's wheelsets."""
+        return self.bogie_twist * (self.bogie_base_m or 0.0)
+
+    @property
     def duration_s(self) -> float:
         return self.ramp_s + self.hold_s
+
+    @property
+    def window(self) -> float:
+        """The final averaging window [s]."""
+        return self.window_s if self.window_s is not None else min(DEFAULT_WINDOW_S, self.hold_s)
+
+
+#: default length of the final window the quasi-static end values are averaged over [s]
+DEFAULT_WINDOW_S = 5.0
 
 
 def en14363_twist_limit(base_m: float) -> float:
@@ -140,6 +186,15 @@ class SolverSettings:
     jobs: int = 2
 
 
+@dataclass(frozen=True)
+class VerifySettings:
+    """``pneumorail verify``: the run is repeated with every step halved ``levels`` times; it
+    fails when a headline metric's estimated relative discretisation error (Richardson) at
+    the scenario's own steps exceeds ``tolerance``."""
+
+    tolerance: float = 0.005
+    levels: int = 2
+
 
 
 @dataclass(frozen=True)
@@ -147,7 +202,9 @@ class CurveTest:
     """Curve entry (paper §4.2, Fig. 9): straight, clothoid transition, circular arc, at constant
     speed. The car starts at rest relative to the straight (rear wheelset at s = 0), so
     ``straight_m`` must hold the whole car. ``valve_settings``: runs with the levelling and
-    differential valves disconnected (false) and connected (true)."""
+    differential valves disconnected (false) and connected (true). ``window_s``: final window
+    over which the end values (roll, bellow crushing) are averaged (default 5 s, or the whole run
+    if shorter)."""
 
     speed_m_per_s: float = 10.0
     straight_m: float = 20.0
@@ -158,6 +215,12 @@ class CurveTest:
     direction: int = 1
     duration_s: float = 30.0
     valve_settings: Tuple[bool, ...] = (False, True)
+    window_s: Optional[float] = None
+
+    @property
+    def window(self) -> float:
+        """The final averaging window [s]."""
+        return self.window_s if self.window_s is not None else min(DEFAULT_WINDOW_S, self.duration_s)
 
     def track(self) -> TrackGeometry:
         return TrackGeometry.curve_entry(self.straight_m, self.transition_m, self.radius_m, self.arc_m,
@@ -207,20 +270,37 @@ class CarCircuit:
 
 @dataclass(frozen=True)
 class Check:
-    """A threshold on a summary metric, e.g. ``dqq_max <= 0.6``."""
+    """A threshold on a summary metric, e.g. ``dqq_max <= 0.6``, optionally for one wheel, one k
+    and one valve setting: ``dqq_max[3R] <= 0.6``, ``dqq_qs_max[k=0, valves=on] <= 0.6``. The
+    value checked is the largest over the cases (k, valve setting) and wheels the selectors
+    leave (no selector: over all of them)."""
 
     metric: str
     op: str
     limit: float
     text: str
+    wheel: Optional[str] = None
+    k: Optional[float] = None
+    valves: Optional[bool] = None
 
     def holds(self, value: float) -> bool:
         return {"<=": value <= self.limit, "<": value < self.limit, ">=": value >= self.limit,
                 ">": value > self.limit}[self.op]
 
+    def selects(self, k: float, valves: bool) -> bool:
+        """Whether the case (k, valve setting) is one the check is about."""
+        return (self.k is None or k == self.k) and (self.valves is None or valves == self.valves)
 
-CHECK_METRICS = {"twist": ("dqq_max",), "curve_entry": ("roll_max_rad", "air_injected_kg")}
-_CHECK = re.compile(r"^\s*([A-Za-z_]\w*)\s*(<=|<|>=|>)\s*([-+]?[0-9.]+(?:[eE][-+]?\d+)?)\s*$")
+
+#: checkable metrics per scenario kind (each the largest over the selected cases)
+CHECK_METRICS = {"twist": ("dqq_max", "dqq_qs_max", "dqq_drift"),
+                 "curve_entry": ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}
+#: metrics that can name a wheel (``dqq_max[3R]``): without one, the largest over the wheels
+WHEEL_METRICS = ("dqq_max", "dqq_qs_max", "dqq_drift")
+_NUMBER = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?\d+)?"
+_CHECK = re.compile(r"^\s*([A-Za-z_]\w*)\s*((?:\[[^\[\]]*\]\s*)*)(<=|<|>=|>)\s*(" + _NUMBER + r")\s*$")
+_SELECTOR = re.compile(r"^\s*(?:(?P<wheel>[0-9]+[A-Za-z]+)|k\s*=\s*(?P<k>" + _NUMBER + r"|[-+]?\.?inf(?:inity)?)"
+                       r"|valves\s*=\s*(?P<valves>on|off|true|false))\s*$", re.IGNORECASE)
 
 
 # ----------------------------------------------------------------------------------- scenario
@@ -240,6 +320,7 @@ class Scenario:
     twist: Optional[TwistTest] = None
     curve: Optional[CurveTest] = None
     solver: SolverSettings = SolverSettings()
+    verify: VerifySettings = VerifySettings()
     checks: Tuple[Check, ...] = ()
     raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
@@ -308,8 +389,8 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         return Scenario(**common, rig=rig, test=test)
 
     experiment = "twist" if kind == "twist" else "curve"
-    check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", experiment, "solver", "checks"),
-               path, [])
+    check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", experiment, "solver", "verify",
+                      "checks"), path, [])
     vehicle = _vehicle(data.get("vehicle"), path)
     _check_car_builds(vehicle, data.get("vehicle"), path)
     circuit = _car_circuit(require(data, "circuit", path, [], dict), path)
@@ -317,17 +398,24 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     if solver.coupling not in COUPLINGS:
         raise ScenarioError(path, ["solver", "coupling"], f"expected one of {COUPLINGS}, got {solver.coupling!r}")
     if kind == "twist":
-        tests = {"twist": _twist(data.get("twist"), path)}
+        tests = {"twist": _twist(data.get("twist"), vehicle, path)}
         duration = tests["twist"].duration_s
+        valve_settings = tests["twist"].valve_settings or (circuit.valves,)
     else:
         tests = {"curve": _curve(data.get("curve"), vehicle, path)}
         duration = tests["curve"].duration_s
-        if circuit.explicit is not None and len(set(tests["curve"].valve_settings)) > 1:
-            raise ScenarioError(path, ["curve", "valve_settings"], "an explicit circuit (circuit.components) has no "
-                                                                   "valves switch: give a single setting")
+        valve_settings = tests["curve"].valve_settings
+    if circuit.explicit is not None and len(set(valve_settings)) > 1:
+        raise ScenarioError(path, [experiment, "valve_settings"], "an explicit circuit (circuit.components) has no "
+                                                                  "valves switch: give a single setting")
     _check_steps(solver, duration, path)
-    checks = _checks(data.get("checks", []), kind, path)
-    return Scenario(**common, vehicle=vehicle, circuit=circuit, solver=solver, checks=checks, **tests)
+    verify = build(VerifySettings, data.get("verify"), path, ["verify"])
+    if not verify.tolerance > 0:
+        raise ScenarioError(path, ["verify", "tolerance"], f"expected a relative error > 0, got {verify.tolerance}")
+    if verify.levels < 2:
+        raise ScenarioError(path, ["verify", "levels"], f"Richardson extrapolation needs at least 2 halvings, got {verify.levels}")
+    checks = _checks(data.get("checks", []), kind, path, common["k_W_per_K"], valve_settings)
+    return Scenario(**common, vehicle=vehicle, circuit=circuit, solver=solver, verify=verify, checks=checks, **tests)
 
 
 def _check_steps(solver: SolverSettings, duration_s: float, path) -> None:
@@ -346,12 +434,43 @@ def _check_steps(solver: SolverSettings, duration_s: float, path) -> None:
         raise ScenarioError(path, ["solver", "jobs"], f"expected at least 1 process, got {solver.jobs}")
 
 
-def _twist(data, path) -> TwistTest:
+def _twist(data, vehicle: VehicleParams, path) -> TwistTest:
     twist = build(TwistTest, data, path, ["twist"])
     for i, w in enumerate(twist.raised_wheels):
         if w not in WHEELS:
             raise ScenarioError(path, ["twist", f"raised_wheels[{i}]"], f"unknown wheel {w!r} (wheels: {', '.join(WHEELS)})")
+    if twist.window_s is not None and twist.window_s > twist.hold_s:
+        raise ScenarioError(path, ["twist", "window_s"], f"the final window must lie within the hold "
+                                                         f"(hold_s = {twist.hold_s:g} s), got {twist.window_s:g} s")
+    if not twist.settle_drift > 0:
+        raise ScenarioError(path, ["twist", "settle_drift"], f"must be > 0 (a drift of ΔQ/Q0), got {twist.settle_drift}")
+    _valve_settings(twist.valve_settings, path, ["twist", "valve_settings"])
+    if twist.bogie_twist_per_mille is not None and twist.bogie_base_m is None:
+        raise ScenarioError(path, ["twist", "bogie_twist_per_mille"], "a bogie twist needs its base: set bogie_base_m "
+                                                                      "(the wheelbase 2a+)")
+    if twist.bogie_base_m is not None:
+        # the rails are twisted about the real wheel positions: the bases must be the car's
+        for key, value, name, actual in (("bogie_base_m", twist.bogie_base_m, "vehicle.wheelbase_m", vehicle.wheelbase_m),
+                                         ("base_m", twist.base_m, "vehicle.bogie_centre_distance_m",
+                                          vehicle.bogie_centre_distance_m)):
+            if abs(value - actual) > 1e-9 * actual:
+                raise ScenarioError(path, ["twist", key], f"with a bogie twist the bases are the car's: expected "
+                                                          f"{name} = {actual:g} m, got {value:g} m")
+        side = twist.raised_wheels[0][-1] if twist.raised_wheels else ""
+        if sorted(twist.raised_wheels) != [f"1{side}", f"2{side}"]:
+            raise ScenarioError(path, ["twist", "raised_wheels"], "a bogie twist (bogie_base_m) twists one side of the "
+                                                                  "front bogie: expected [1R, 2R] or [1L, 2L], got "
+                                                                  f"{list(twist.raised_wheels)}")
     return twist
+
+
+def _valve_settings(settings, path, where) -> None:
+    if settings is None:
+        return
+    if not settings:
+        raise ScenarioError(path, where, "expected at least one setting (false: valves isolated, true: connected)")
+    if len(set(settings)) != len(settings):
+        raise ScenarioError(path, where, f"each setting at most once, got {list(settings)}")
 
 
 def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
@@ -367,6 +486,10 @@ def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
     if curve.straight_m < car_length:
         raise ScenarioError(path, ["curve", "straight_m"], f"the straight must hold the whole car ({car_length:g} m "
                                                            f"between the outer wheelsets), got {curve.straight_m:g} m")
+    if curve.window_s is not None and curve.window_s > curve.duration_s:
+        raise ScenarioError(path, ["curve", "window_s"], f"the final window must lie within the run "
+                                                         f"(duration_s = {curve.duration_s:g} s), got {curve.window_s:g} s")
+    _valve_settings(curve.valve_settings, path, ["curve", "valve_settings"])
     on_track = (curve.straight_m + curve.transition_m + curve.arc_m - car_length) / curve.speed_m_per_s
     if curve.duration_s > on_track:
         raise ScenarioError(path, ["curve", "duration_s"], f"the front wheelset leaves the track at t = {on_track:.3g} s; "
@@ -494,17 +617,53 @@ def _check_car_builds(vehicle: VehicleParams, source, file) -> None:
         raise ScenarioError(where, ["vehicle"] if where == file else [], f"inconsistent car parameters: {exc}") from None
 
 
-def _checks(value, kind, file) -> Tuple[Check, ...]:
+def _checks(value, kind, file, k_values: Sequence[float] = (), valve_settings: Sequence[bool] = ()) -> Tuple[Check, ...]:
+    """``metric[selectors] op number``; selectors (comma-separated, in one or more brackets): a
+    wheel (1L ... 4R, for the per-wheel metrics), ``k=<value>`` (one of the scenario's k values,
+    ``inf`` for isothermal) and ``valves=on|off`` (one of its valve settings)."""
     if not isinstance(value, list):
         raise ScenarioError(file, ["checks"], f"expected a list like ['dqq_max <= 0.6'], got {type(value).__name__}")
     out = []
     for i, text in enumerate(value):
+        where = [f"checks[{i}]"]
         m = _CHECK.match(text) if isinstance(text, str) else None
         if not m:
-            raise ScenarioError(file, [f"checks[{i}]"], f"expected 'metric <= number' (or <, >=, >), got {text!r}")
-        metric, op, limit = m.group(1), m.group(2), float(m.group(3))
+            raise ScenarioError(file, where, f"expected 'metric <= number' (or <, >=, >; optionally "
+                                             f"metric[3R, k=0, valves=on]), got {text!r}")
+        metric, selectors, op, limit = m.group(1), m.group(2), m.group(3), float(m.group(4))
         if metric not in CHECK_METRICS[kind]:
-            raise ScenarioError(file, [f"checks[{i}]"], f"unknown metric {metric!r} for a {kind} scenario "
-                                                        f"(known: {', '.join(CHECK_METRICS[kind])})")
-        out.append(Check(metric, op, limit, text.strip()))
+            raise ScenarioError(file, where, f"unknown metric {metric!r} for a {kind} scenario "
+                                             f"(known: {', '.join(CHECK_METRICS[kind])})")
+        chosen: Dict[str, Any] = {}
+        items = [item for group in re.findall(r"\[([^\[\]]*)\]", selectors) for item in group.split(",")]
+        for item in items:
+            sel = _SELECTOR.match(item)
+            if not sel:
+                raise ScenarioError(file, where, f"unknown selector {item.strip()!r} in {text!r} (expected a wheel "
+                                                 f"{WHEELS[0]} ... {WHEELS[-1]}, k=<value> or valves=on|off)")
+            name = next(n for n in ("wheel", "k", "valves") if sel.group(n) is not None)
+            if name in chosen:
+                raise ScenarioError(file, where, f"{name} selected twice in {text!r}")
+            raw = sel.group(name)
+            if name == "wheel":
+                wheel = raw.upper()
+                if wheel not in WHEELS:
+                    raise ScenarioError(file, where, f"unknown wheel {raw!r} in {text!r} (wheels: {', '.join(WHEELS)})")
+                if metric not in WHEEL_METRICS:
+                    raise ScenarioError(file, where, f"{metric} is not a per-wheel metric: no wheel selector "
+                                                     f"(per-wheel: {', '.join(m for m in WHEEL_METRICS if m in CHECK_METRICS[kind]) or 'none'})")
+                chosen[name] = wheel
+            elif name == "k":
+                k = float(re.sub(r"\.?inf(inity)?$", "inf", raw.lower()))   # .inf, inf, -.inf
+                if k not in k_values:
+                    raise ScenarioError(file, where, f"k = {raw} is not one of the scenario's k values "
+                                                     f"({', '.join(k_label(v) for v in k_values)})")
+                chosen[name] = k
+            else:
+                on = raw.lower() in ("on", "true")
+                if on not in valve_settings:
+                    shown = ", ".join("on" if v else "off" for v in valve_settings)
+                    raise ScenarioError(file, where, f"valves={raw} is not a valve setting of the scenario ({shown})")
+                chosen[name] = on
+        out.append(Check(metric, op, limit, text.strip(), **chosen))
     return tuple(out)

@@ -1,11 +1,14 @@
 """Curve entry co-simulated with the full four-point circuit (valves): consumption, levelling, mass balance."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 import yaml
 
-from cosim.curve import simulate_curve
+from cosim.criteria import window_mean
+from cosim.curve import car_centre_s_m, make_car, relative_roll_rad, simulate_curve, track_roll_rad
 from cosim.scenario import load_scenario
 from helpers import SCENARIOS, write_scenario
 
@@ -68,9 +71,42 @@ def test_circuit_mass_balance_closes(curve_runs):
 def test_isothermal_rolls_more_without_valves(curve_runs):
     _, runs = curve_runs
     ks, rec, diag, _ = runs[False]
-    roll_end = np.abs(rec["roll_rad"][-1])
+    # the steady roll: mean over the last 3 s in the arc, whatever phase the ~1 Hz sway is in
+    roll_end = np.abs(window_mean(rec["t_s"], rec["roll_rad"], 3.0))
     # softer isothermal bellows (A^2 p / V instead of gamma A^2 p / V): more roll (paper Fig. 9)
     assert roll_end[ks.index(float("inf"))] > roll_end[ks.index(0.0)]
+
+
+def test_roll_is_measured_from_the_track_plane_at_the_car_centre(tmp_path):
+    """Cant raises the outer (right) rail of a left-hand curve: the track plane rolls right side
+    up (negative carbody roll) and the carbody's outward roll relative to it scales with the
+    lateral acceleration left uncompensated in the plane, a_u = (v^2/R) cos c - g sin c. Half the
+    balancing cant (c = atan(v^2/(g R)) / 2, 76 mm over 1.5 m) halves the relative roll; with the
+    sign of the cant taken the wrong way round the ratio would be ~3."""
+    g = 9.81
+    runs = {}
+    for name, cant in (("level", 0.0), ("canted", 0.5 * math.atan(10.0 ** 2 / (g * 100.0)))):
+        s = curve_scenario(tmp_path, k=(float("inf"),), cant_rad=cant, duration_s=8.0, arc_m=100.0)
+        ks, rec, diag, _ = simulate_curve(s, valves=False)
+        assert not diag
+        runs[name] = s, rec
+    s, rec = runs["canted"]
+    c, v, R = s.curve.cant_rad, s.curve.speed_m_per_s, s.curve.radius_m
+    # the car centre starts where MetroCar puts it: the rear wheelset at s = 0
+    assert car_centre_s_m(s, np.array([0.0]))[0] == pytest.approx(make_car(s).start_s_m, abs=1e-12)
+    t = rec["t_s"]
+    assert track_roll_rad(s, t)[0] == 0.0 and track_roll_rad(s, t)[-1] == pytest.approx(-c, rel=1e-12)   # in the arc
+    rel = relative_roll_rad(s, rec)
+    assert np.array_equal(rel, rec["roll_rad"] - track_roll_rad(s, t)[:, None])
+    level = window_mean(runs["level"][1]["t_s"], runs["level"][1]["roll_rad"][:, 0], 3.0)
+    canted = window_mean(t, rel[:, 0], 3.0)
+    assert level > 0 and canted > 0                       # outward (left side up) in a left-hand curve
+    # 10 %: the window mean over 3 s leaves up to ~3 % of the undamped ~1 Hz sway, and the load
+    # normal to the plane, g cos c + (v^2/R) sin c, is 2.5 % above g, stiffening the bellows
+    a_u = (v * v / R) * math.cos(c) - g * math.sin(c)
+    assert canted / level == pytest.approx(a_u / (v * v / R), rel=0.10)
+    # the absolute roll is the plane's plus the relative one
+    assert window_mean(t, rec["roll_rad"][:, 0], 3.0) == pytest.approx(canted - c, rel=1e-9)
 
 
 
