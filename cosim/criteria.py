@@ -34,13 +34,21 @@ def _span_mean(t: np.ndarray, v: np.ndarray, t0: float, t1: float) -> np.ndarray
 
 
 def _checked(t_s, values, window_s: float):
+    """The series as arrays, or None when it is shorter than the window: the window is
+    validated against the planned duration at load time, so a shorter series is a run that
+    stopped early (every case diverged) and has no final window."""
     t = np.asarray(t_s, dtype=float)
     v = np.asarray(values, dtype=float)
     if not window_s > 0:
         raise ValueError(f"window_s must be > 0, got {window_s}")
     if t[-1] - window_s < t[0] - 1e-9 * max(1.0, abs(t[0])):
-        raise ValueError(f"the window ({window_s:g} s) is longer than the series ({t[-1] - t[0]:g} s)")
+        return None
     return t, v
+
+
+def _nan_like(values) -> np.ndarray:
+    v = np.asarray(values, dtype=float)
+    return np.full(v.shape[1:], np.nan) if v.ndim > 1 else np.float64(np.nan)
 
 
 def window_mean(t_s: np.ndarray, values: np.ndarray, window_s: float) -> np.ndarray:
@@ -48,8 +56,12 @@ def window_mean(t_s: np.ndarray, values: np.ndarray, window_s: float) -> np.ndar
     [t_end - window_s, t_end], by the trapezoidal rule on the samples (exact for a piecewise-linear
     signal; for a sampled oscillation of period P the error is O((dt/P)^2) of its amplitude).
     A quasi-static end value that does not depend on where an oscillation happens to be at the
-    last sample. NaN samples (a diverged case) give NaN."""
-    t, v = _checked(t_s, values, window_s)
+    last sample. NaN samples (a diverged case) or a series shorter than the window (a run that
+    stopped early) give NaN."""
+    checked = _checked(t_s, values, window_s)
+    if checked is None:
+        return _nan_like(values)
+    t, v = checked
     return _span_mean(t, v, max(t[-1] - window_s, t[0]), t[-1])
 
 
@@ -58,11 +70,15 @@ def window_drift(t_s: np.ndarray, values: np.ndarray, window_s: float) -> np.nda
     [t_end - W, t_end] minus the mean over the window before it, [t_end - 2W, t_end - W] (cut at
     the start of the series). A trend of rate c gives c W; an oscillation of amplitude b and
     angular frequency w at most 4 b / (w W), however the windows fall on its periods. NaN when
-    there is no earlier window (the final window is the whole series) or a sample is NaN."""
-    t, v = _checked(t_s, values, window_s)
+    there is no earlier window (the final window is the whole series, or longer) or a sample is
+    NaN."""
+    checked = _checked(t_s, values, window_s)
+    if checked is None:
+        return _nan_like(values)
+    t, v = checked
     t1 = t[-1] - window_s
     if not t1 > t[0]:
-        return np.full(v.shape[1:], np.nan) if v.ndim > 1 else np.nan
+        return _nan_like(v)
     last = _span_mean(t, v, t1, t[-1])
     before = _span_mean(t, v, max(t1 - window_s, t[0]), t1)
     return np.abs(last - before)

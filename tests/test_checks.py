@@ -41,8 +41,7 @@ def test_window_mean_is_exact_for_piecewise_linear_series_and_spans_the_window()
     # window [1.5, 4]: x(1.5) = 2 by interpolation; area 0.5 (2 + 3)/2 + 2 (3 - 1)/2 = 3.25
     assert window_mean(t, x, 2.5) == pytest.approx(3.25 / 2.5, rel=1e-14)
     assert window_mean(t, x, 4.0) == pytest.approx((3.0 + 2.0 + 2.0) / 4.0, rel=1e-14)
-    with pytest.raises(ValueError):
-        window_mean(t, x, 4.5)                     # longer than the series
+    assert math.isnan(window_mean(t, x, 4.5))     # longer than the series: a run that stopped early
     with pytest.raises(ValueError):
         window_mean(t, x, 0.0)
     assert math.isnan(window_mean(t, np.array([1.0, 2.0, np.nan, 1.0]), 2.5))   # a diverged case
