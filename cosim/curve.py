@@ -58,11 +58,11 @@ def with_valves(scenario: Scenario, valves: bool) -> Scenario:
 
 
 def simulate_curve(scenario: Scenario, valves: bool, progress: bool = False):
-    """Every k with the valves connected or not: (k values, record arrays, diagnoses, link names)."""
+    """Every k with the valves connected or not: (k values, record arrays, diagnoses, circuit)."""
     variant = with_valves(scenario, valves)
     label = f"{scenario.name} valves {'on' if valves else 'off'}" if progress else None
     ks, rec, diagnoses = simulate(variant, make_car, scenario.curve.duration_s, label)
-    return ks, rec, diagnoses, Circuit(variant.circuit.components()).link_names
+    return ks, rec, diagnoses, Circuit(variant.circuit.components())
 
 
 def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
@@ -72,19 +72,19 @@ def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
              f"transition, R = {curve.radius_m:g} m; {len(scenario.k_W_per_K)} k values x valves {curve.valve_settings}")
     rows, runs, diagnoses, cases = [], {}, [], []
     for valves in curve.valve_settings:
-        ks, rec, diag, links = simulate_curve(scenario, valves, progress=not progress.quiet)
+        ks, rec, diag, circuit = simulate_curve(scenario, valves, progress=not progress.quiet)
         rec = {**rec, "roll_rel_rad": relative_roll_rad(scenario, rec)}
         runs[valves] = (ks, rec)
         diagnoses += [f"valves {'on' if valves else 'off'}: {d}" for d in diag]
         tag = "on" if valves else "off"
         for j, k in enumerate(ks):
-            rows.append(_summary_row(valves, k, rec, j, curve))
+            rows.append(_summary_row(valves, k, rec, j, curve, circuit.valve_names))
             cases.append(CaseMetrics(k, valves, {m: rows[-1][m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}))
             cols = record_columns(rec, j)
             cols["roll_track_plane_rad"] = track_roll_rad(scenario, rec["t_s"])
             cols["roll_carbody_rel_track_rad"] = rec["roll_rel_rad"][:, j]
             cols.update({f"q_{name}_kg_per_s": rec["link_flow_kg_per_s"][:, i, j]
-                         for i, name in enumerate(links) if name.startswith(VALVE_PREFIXES)})
+                         for i, name in enumerate(circuit.link_names) if name.startswith(VALVE_PREFIXES)})
             write_columns(out / "timeseries" / f"curve_valves={tag}_k={k_label(k)}.csv", cols)
     write_rows(out / "summary.csv", rows)
     _plots(out, runs)
@@ -103,10 +103,13 @@ def _largest(values) -> float:
     return float("nan") if any(v != v for v in values) else max(values)
 
 
-def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int, curve: CurveTest) -> Dict[str, object]:
+def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int, curve: CurveTest,
+                 valve_names=()) -> Dict[str, object]:
     """Roll relative to the track plane (largest |roll| over the run, and its mean over the final
     window: the steady roll in the arc, not wherever the ~1 Hz sway is at the last sample), air
-    exchanged (cumulative: its last sample), bellow crushing (final-window means)."""
+    exchanged (cumulative: its last sample), bellow crushing (final-window means), and per
+    levelling valve the air through its supply and exhaust sides and the fraction of the run each
+    side was open."""
     t = rec["t_s"]
     roll = rec["roll_rel_rad"][:, j]
     row = {"valves": valves, "k_W_per_K": k, "roll_max_rad": float(np.abs(roll).max()),
@@ -115,6 +118,12 @@ def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int, cur
            "air_exhausted_kg": float(rec["air_to_atmosphere_kg"][-1, j]) + 0.0}  # no "-0"
     z = window_mean(t, rec["crushing_m"][:, :, j], curve.window)
     row.update({f"z_mean_end_{b}_m": float(z[i]) for i, b in enumerate(BELLOWS)})
+    duration = float(t[-1] - t[0])
+    for i, v in enumerate(valve_names):
+        row[f"{v}_supply_air_kg"] = float(rec["valve_supply_air_kg"][-1, i, j])
+        row[f"{v}_exhaust_air_kg"] = float(rec["valve_exhaust_air_kg"][-1, i, j])
+        row[f"{v}_supply_open_fraction"] = float(rec["valve_supply_open_s"][-1, i, j]) / duration
+        row[f"{v}_exhaust_open_fraction"] = float(rec["valve_exhaust_open_s"][-1, i, j]) / duration
     row["T_bellow_min_K"] = float(rec["bellow_T_K"][:, :, j].min())
     row["T_bellow_max_K"] = float(rec["bellow_T_K"][:, :, j].max())
     # closes to the integrator's round-off: air in the chambers changes only by what crosses the boundary

@@ -130,3 +130,20 @@ def test_two_point_layout():
     z = np.array([0.03, -0.03, 0.0, 0.0])          # FL compressed, FR extended: a pure roll
     flows = dict(zip(circuit.link_names, circuit.outputs(x, z).link_flow_kg_per_s))
     assert flows["lv_F.supply"] == 0.0 and flows["lv_F.exhaust"] == 0.0   # a two-point valve cannot level roll
+
+
+def test_per_valve_air_adds_up_to_the_supply_total_and_open_fractions_are_fractions(curve_runs):
+    # The supply's air can only reach the car through the levelling valves' supply sides (the
+    # differential valves join two bellows): their sum is the total injected, to round-off.
+    from cosim.curve import _summary_row
+    s, runs = curve_runs
+    ks, rec, _, circuit = runs[True]
+    rec = {**rec, "roll_rel_rad": relative_roll_rad(s, rec)}
+    assert circuit.valve_names
+    for j, k in enumerate(ks):
+        row = _summary_row(True, k, rec, j, s.curve, circuit.valve_names)
+        supplied = sum(row[f"{v}_supply_air_kg"] for v in circuit.valve_names)
+        assert supplied == pytest.approx(row["air_injected_kg"], rel=1e-9, abs=1e-12)
+        assert row["air_injected_kg"] > 0
+        fractions = [row[f"{v}_{side}_open_fraction"] for v in circuit.valve_names for side in ("supply", "exhaust")]
+        assert all(0.0 <= f <= 1.0 for f in fractions) and max(fractions) > 0.0
