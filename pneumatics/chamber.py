@@ -14,7 +14,7 @@ from typing import Optional
 class Bellow:
     """An airspring: a chamber whose volume and effective area depend on the crushing z.
 
-    z is positive in compression (design.md): V = V0 - (dV/dz) z, A_e = A0 + (dA/dz) z.
+    z is positive in compression (docs/models.md): V = V0 - (dV/dz) z, A_e = A0 + (dA/dz) z.
     Defaults are the paper's Table 1 (its "volume gradient 0.13 m^2" equals the effective area).
     ``p0_Pa`` None means the user of the circuit sets it (e.g. from the static load).
     """
@@ -51,7 +51,7 @@ def heat_flow_into_W(k_W_per_K, T_K, T_atm_K):
     """Heat flow INTO a chamber from the atmosphere, eq. (8) with the physical sign.
 
     The paper writes dQ/dt = k (T - T_atm) and adds it in eq. (2); taken literally a hot
-    chamber would heat up further (design.md, erratum 1). Heat flows from hot to cold:
+    chamber would heat up further (docs/models.md, erratum 1). Heat flows from hot to cold:
     dQ/dt = k (T_atm - T).
     """
     return k_W_per_K * (T_atm_K - T_K)
@@ -87,6 +87,6 @@ def bellow_stiffness_N_per_m(bellow: Bellow, z_m, p_Pa, p_atm_Pa, polytropic_ind
 def quasi_static_stiffness_N_per_m(bellow: Bellow, p0_Pa, V_m3, polytropic_index):
     """Table 2: n A^2 p0 / V (n = gamma adiabatic, 1 isothermal) for a bellow whose air, of total
     volume V (bellow plus tank), is compressed at z = 0: n A0 (dV/dz) p0 / V, with dV/dz = A0 for
-    the paper's cylindrical bellow (Table 1, design.md erratum 3). (dA/dz = 0 assumed: the
+    the paper's cylindrical bellow (Table 1, docs/models.md erratum 3). (dA/dz = 0 assumed: the
     effective-area term dA/dz (p0 - p_atm) would add to it.)"""
     return polytropic_index * bellow.A0_m2 * bellow.dV_dz_m2 * p0_Pa / V_m3

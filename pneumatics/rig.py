@@ -86,7 +86,7 @@ def run_time_series(components: Dict[str, object], k_W_per_K: float, motion: Mot
 
 def pipe_mach_number(circuit: Circuit, x: np.ndarray, out) -> np.ndarray:
     """Largest Mach number over the dynamic pipes, per sample: eq. (5) is an incompressible law,
-    outside its validity beyond Mach ~0.3 (design.md erratum 4). Velocity |q| / (rho_mean A),
+    outside its validity beyond Mach ~0.3 (docs/models.md erratum 4). Velocity |q| / (rho_mean A),
     sound speed sqrt(gamma R T) at the colder end."""
     names = circuit.pipe_names
     if not names:

@@ -1,4 +1,4 @@
-"""Physics tests of the pneumatic circuit (paper §2-3, design.md conventions and errata).
+"""Physics tests of the pneumatic circuit (paper §2-3, docs/models.md conventions and errata).
 
 Every expected value below is computed in this file from the paper's equations and Table 1
 (closed forms, linearised theory, or an independent re-implementation of ISO 6358), never
@@ -34,7 +34,7 @@ from pneumatics.valves import (LEVELLING_C_MAX, DifferentialPressureValve, Level
                                differential_valve_flow_kg_per_s)
 
 # ----------------------------------------------------------------------------- constants
-R = 287.0                       # J/(kg K), design.md
+R = 287.0                       # J/(kg K), docs/models.md
 GAMMA = 1.4
 CV = R / (GAMMA - 1.0)          # 717.5 J/(kg K)
 CP = GAMMA * R / (GAMMA - 1.0)
@@ -121,7 +121,7 @@ def test_closed_isothermal_bellow_follows_p_V(motion_name):
     z = motion_samples(motion, t)
     out = circuit.outputs(sol.y, z)
     V = V_B - A_E * z[0]
-    # k = inf is the exact limit (design.md): T is held, not relaxed, so it is bit-for-bit T_atm.
+    # k = inf is the exact limit (docs/models.md): T is held, not relaxed, so it is bit-for-bit T_atm.
     assert np.all(out.T_K == T_ATM)
     # With m and T exactly constant, p V = m R T holds to round-off (1e-13 covers a few ulps).
     pv = out.p_Pa[0] * out.V_m3[0]
@@ -166,7 +166,7 @@ def table2_formula(n, V):
 
 def test_table2_formula_values():
     # The formula gives the paper's 243/173 kN/m for bellow+tank and 789/563 kN/m for the
-    # bellow alone (the paper's printed 816/582 is erratum 2 of design.md).
+    # bellow alone (the paper's printed 816/582 is erratum 2 of docs/models.md).
     assert round(table2_formula(GAMMA, V_B + V_T) / 1e3) == 243
     assert round(table2_formula(1.0, V_B + V_T) / 1e3) == 173
     assert round(table2_formula(GAMMA, V_B) / 1e3) == 789

@@ -7,16 +7,17 @@ on level track.
 
 * Primary suspension: one spring-damper per axlebox (``RigidBodySpringDamper``), x/y/z stiffness
   and damping from :class:`VehicleParams`.
-* Secondary suspension (airsprings), per bellow:
-    - an axial force pair F(z) = F_N + dF/dz (z - z_call) pushing the carbody up and the bogie
-      down: a ``CartesianSpringDamper`` between the upper and lower plate centres whose force
-      law is a symbolic user function of the crushing z. The axis n is the normal of the track
-      plane under the bogie centre: global z on uncanted track (the paper's curve), so the pair
-      is exactly vertical there, whatever the yaw. The bogie frame's z would differ from it by
-      the bogie roll on its primary (5 mrad in the paper's curve: a lateral component of 0.5 % of
-      F, against a shear force of 10 % of F); on canted track n follows the cant. A
-      point-to-point spring would add a negative lateral stiffness -F/L (design notes);
-    - shear stiffness in x and y (``RigidBodySpringDamper``).
+* Secondary suspension (airsprings), per bellow, one ``RigidBodySpringDamper`` in exudyn's
+  intrinsic formulation between the lower plate (bogie frame) and the upper plate (carbody):
+  the plate offset d is measured in the mid-frame between the two bodies and the force is
+  applied at the midpoint of the plate centres on both bodies. Its symbolic user function gives
+    - the axial force F(t, z) = F_n + dF/dt (t - t_n) + dF/dz (z - z_n) along the mid-frame's z
+      axis (the bellow axis: the mean of the plates' normals; on canted track it follows the
+      bodies), pushing the carbody up and the bogie down, with the crushing z = h0 - d_z;
+    - shear stiffness across it (d_x, d_y).
+  A point-to-point spring would add a negative lateral stiffness -F/L; this force does not turn
+  with the plate offset, only with the bodies' mean roll (a lateral component F (phi_c +
+  phi_b)/2 in a curve: the carbody leans on its bellows' axes).
 * Lateral bumpstops, one per bogie: between bogie frame and carbody at the bogie centre, at the
   height of the lower bellow plate (where the carbody's centre pivot meets the stops on the bogie
   frame); lateral force k_bs (|d| - clearance) beyond the clearance, 0 inside it.
@@ -27,15 +28,16 @@ on level track.
   ``rail_height_m`` irregularity. Lateral wheel-rail forces (creep, flange) are not modelled:
   the guidance carries them.
 * Wheelset guidance (:meth:`MetroCar._add_wheelset_guidance`): each wheelset runs along the
-  track at constant speed v, its centre at arc length s_i(t) = s0_i + v t. A ``GenericJoint``
-  to ground, whose frame follows the track (heading psi(s_i), and the cant roll) through a
-  symbolic offset user function set before every internal step, locks the wheelset centre's
-  longitudinal and lateral position, its pitch (no spin: the wheelset body does not rotate
-  about its axle) and its yaw: the axle stays normal to the track tangent (radial wheelsets).
-  Vertical motion and roll about the tangent stay free, on the contact springs. ``track=None``
-  is an unbounded straight level track along x (speed 0: the stationary rig of the twist
-  test). The centrifugal and gyroscopic loads arise from this prescribed motion alone; no
-  force is added.
+  track at constant speed v, at arc length s_i(t) = s0_i + v t. A ``GenericJoint`` to ground
+  at rail level (the point midway between the wheelset's contacts), whose frame follows the
+  track (heading psi(s_i), and the cant roll) through a symbolic offset user function set
+  before every internal step, locks that point's longitudinal and lateral position, the
+  wheelset's pitch (no spin: the wheelset body does not rotate about its axle) and its yaw: the
+  axle stays normal to the track tangent (radial wheelsets). Vertical motion and roll about the
+  tangent stay free, on the contact springs; a wheelset rolls about its rail-level point, as it
+  does between two rails. ``track=None`` is an unbounded straight level track along x (speed 0:
+  the stationary rig of the twist test). The centrifugal and gyroscopic loads arise from this
+  prescribed motion alone; no force is added.
 
 Newton's third law in the strong form (moment balance). A force pair between body-fixed points
 that separate is not collinear and leaves a couple d x f: the bellow pair (F = 42 kN over the
@@ -43,23 +45,15 @@ that separate is not collinear and leaves a couple d x f: the bellow pair (F = 4
 bellow height) left 5.9 kNm per bogie, 31 % of the 37.7 kNm by which the wheel loads must
 balance the overturning moment (measured before this was fixed). Hence:
 
-* all ``RigidBodySpringDamper`` connectors (primary, shear, bumpstops) use exudyn's intrinsic
-  formulation: axes of the mid-frame between the two bodies, force applied at the midpoint of the
-  two markers on both bodies;
-* the ``CartesianSpringDamper`` of each bellow keeps its force at the plate centres (its force
-  output and crushing are the co-simulation interface), and :meth:`MetroCar._set_end_moments`
-  adds the end moments -(d x F n)/2 on carbody and bogie frame each (torque loads): with them the
-  pair's line of action passes through the bellow midpoint too -- the bellow behaves as a
-  point-symmetric element whose force resultant passes through its centre;
-* the guidance joint reacts at the wheelset centre, the rails at rail level:
-  :meth:`MetroCar._set_rail_couples` adds the couple (-z_w n) x f on each wheelset (10 kNm in
-  the paper's curve, 27 % of the overturning moment).
+* all ``RigidBodySpringDamper`` connectors (primary, airsprings, bumpstops) use exudyn's
+  intrinsic formulation: axes of the mid-frame between the two bodies, force applied at the
+  midpoint of the two markers on both bodies;
+* the guidance joint reacts at rail level, where the rails apply the lateral force.
 
-The two torque loads are recomputed from the state at the start of every internal step (one
-step of lag: exudyn's Cartesian connector cannot carry a torque, and neither the joint reaction
-nor the plate offset of another connector is available to a symbolic user function); their
-Jacobian (~F/2 per radian of roll, < 1 % of the roll stiffness) is left out. tests/
-test_vehicle_curve.py checks the wheel load transfer in the curve against the overturning moment.
+Both hold at every instant, from the current state (an earlier version added the bellow end
+moments and the rail couples as torque loads computed at the start of each internal step, one
+step late). tests/test_vehicle_curve.py checks the wheel load transfer in the curve against the
+overturning moment.
 
 Static equilibrium on level track under :meth:`MetroCar.static_bellow_forces_N` is the *reference
 configuration*: bodies sit at their static positions, the primary springs carry their static load
@@ -69,7 +63,7 @@ transient.
 
 Force laws are exudyn *symbolic* user functions: they run in C++ (a Python user function costs
 ~1.5 us per call and the numerical Jacobian calls it 13 times per connector); their inputs (rail
-height/rate, bellow force/stiffness/axis, guidance offsets) are named symbolic variables set from
+height/rate, bellow force law, guidance offsets) are named symbolic variables set from
 Python. The track is evaluated through :class:`~vehicle.guidance.TrackSampler` (~10 us per step).
 
 Solver: implicit generalized-alpha, driven macro-step by macro-step with
