@@ -364,6 +364,8 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     data, text = load_yaml(path)
     if not isinstance(data, dict):
         raise ScenarioError(path, [], f"expected a mapping at the top level, got {type(data).__name__}")
+    if isinstance(data.get("vehicle"), str) and any(o.strip().startswith("vehicle.") for o in overrides):
+        data = {**data, "vehicle": {"file": data["vehicle"]}}  # a parameter file, then single fields on top
     data = apply_overrides(data, overrides, path)
     kind = require(data, "kind", path, [], str)
     if kind not in KINDS:

@@ -59,10 +59,7 @@ def main(argv=None) -> int:
     rows = []
     for label, overrides in VARIANTS:
         t0 = time.perf_counter()
-        # the scenario names the vehicle's parameter file: restate it as {file: ...} so that
-        # single vehicle fields can be overridden on top of it
-        scenario = load_scenario(SCENARIO, ["vehicle={file: params/metro_car.yaml}", *overrides,
-                                            f"solver.jobs={args.jobs}"], args.k)
+        scenario = load_scenario(SCENARIO, [*overrides, f"solver.jobs={args.jobs}"], args.k)
         ks, rec, diagnoses, _ = simulate_curve(scenario, valves=True)
         for j, k in enumerate(ks):
             rows.append({"variant": label, "overrides": "; ".join(overrides), "k_W_per_K": k,

@@ -169,3 +169,15 @@ def test_inconsistent_car_parameters_are_bad_input(tmp_path):
     err = error_for(tmp_path, short_twist(vehicle={"file": str(SCENARIOS / "params" / "metro_car.yaml"),
                                                    "airspring_upper_height_m": 0.5}))
     assert err.path == "vehicle" and "airspring_upper_height_m" in err.reason
+
+
+def test_set_overrides_a_single_field_of_a_vehicle_parameter_file():
+    # the scenario names params/metro_car.yaml; --set vehicle.FIELD changes that field alone
+    base = load_scenario(SCENARIOS / "curve_entry.yaml")
+    changed = load_scenario(SCENARIOS / "curve_entry.yaml", ["vehicle.carbody_cog_height_m=1.8"])
+    assert changed.vehicle.carbody_cog_height_m == 1.8
+    assert changed.vehicle.carbody_cog_height_m != base.vehicle.carbody_cog_height_m
+    others = {f: getattr(base.vehicle, f) for f in vars(base.vehicle) if f != "carbody_cog_height_m"}
+    assert all(getattr(changed.vehicle, f) == v for f, v in others.items())
+    with pytest.raises(ScenarioError, match="vehicle"):
+        load_scenario(SCENARIOS / "curve_entry.yaml", ["vehicle.no_such_field=1"])
