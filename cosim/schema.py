@@ -33,7 +33,9 @@ def _type_name(tp) -> str:
         args = [a for a in typing.get_args(tp) if a is not type(None)]
         return " or ".join(_type_name(a) for a in args) + " (or null)"
     if origin in (tuple, Tuple):
-        return f"a list of {_type_name(typing.get_args(tp)[0])}s"
+        item = typing.get_args(tp)[0]
+        return "a list of " + {float: "numbers", int: "integers", bool: "true/false values", str: "strings"}.get(
+            item, _type_name(item))
     return {float: "a number", int: "an integer", bool: "true/false", str: "a string"}.get(tp, getattr(tp, "__name__", str(tp)))
 
 def coerce(value: Any, tp, file, path: Sequence[str]):

@@ -1,0 +1,94 @@
+"""The scenario key reference (``docs/scenario_keys.md``), generated from the dataclasses that
+validate each section, so that it cannot drift from the code (``tests/test_docs.py`` fails when
+the file is stale).
+
+    python -m cosim.keyref > docs/scenario_keys.md
+"""
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import math
+import typing
+
+from pneumatics.boundary import Supply
+from pneumatics.chamber import Bellow, Tank
+from pneumatics.orifice import Orifice
+from pneumatics.pipe import Pipe
+from pneumatics.valves import DifferentialPressureValve, LevellingValve, SafetyValve
+from vehicle.params import VehicleParams
+
+from .scenario import (CurveTest, QuasiStaticTest, RampTest, SineTest, SolverSettings, StiffnessTest, TwistTest,
+                       VerifySettings)
+from .schema import _type_name
+
+#: (YAML section as written in a scenario, dataclass, note); fields set by the layout (a bellow's
+#: name, a pipe's ends) are listed too: they matter in ``circuit.components``.
+SECTIONS = (
+    ("twist", TwistTest, "kind: twist"),
+    ("curve", CurveTest, "kind: curve_entry"),
+    ("solver", SolverSettings, "twist and curve_entry"),
+    ("verify", VerifySettings, "twist and curve_entry: `pneumorail verify`"),
+    ("test", RampTest, "kind: rig_ramp"),
+    ("test", SineTest, "kind: rig_sine"),
+    ("test", StiffnessTest, "kind: rig_stiffness"),
+    ("test", QuasiStaticTest, "kind: rig_table2"),
+    ("vehicle", VehicleParams, "twist and curve_entry: a parameter file, or {file: ..., FIELD: value}"),
+    ("circuit.bellow", Bellow, "also `type: bellow` in circuit.components"),
+    ("circuit.tank", Tank, "also `type: tank`; `tank: null` = no tank"),
+    ("circuit.pipe, circuit.cross_pipe", Pipe, "also `type: pipe`; a, b: the nodes it joins"),
+    ("circuit.supply", Supply, "also `type: supply`"),
+    ("circuit.levelling_valve", LevellingValve, "also `type: levelling_valve`"),
+    ("circuit.differential_valve", DifferentialPressureValve, "also `type: differential_valve`; null = none"),
+    ("circuit.components: type: safety_valve", SafetyValve, "explicit circuits only"),
+    ("circuit.components: type: orifice", Orifice, "explicit circuits only"),
+)
+
+HEADER = """# Scenario key reference
+
+Generated from the code by `python -m cosim.keyref > docs/scenario_keys.md` (a test fails when
+this file is stale). Every key is optional unless the scenario kind needs it; a missing key takes
+the default shown. Units are in the names (SI: Pa absolute, K, kg, m, s, N, W/K). Top-level keys
+of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is isothermal),
+`checks` (car scenarios: e.g. `dqq_max <= 0.6`, `dqq_max[3R] <= 0.6`, `dqq_max[k=0] <= 0.6`).
+The rig kinds take `circuit: {bellow, tank, pipe, p0_Pa}` and `test`; the car kinds take
+`vehicle`, `circuit` (`layout: four_point | two_point`, `valves`, the sections below, or an
+explicit `components:` mapping of named components with a `type`), `solver`, `verify` and their
+experiment (`twist` or `curve`).
+"""
+
+
+def _default(field: dataclasses.Field) -> str:
+    if field.default is not dataclasses.MISSING:
+        value = field.default
+    elif field.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
+        value = field.default_factory()  # type: ignore[misc]
+    else:
+        return "(required)"
+    if isinstance(value, float) and math.isinf(value):
+        return "`.inf`"
+    if value is None:
+        return "`null`"
+    if isinstance(value, tuple):
+        return "`[" + ", ".join(str(v).lower() if isinstance(v, bool) else str(v) for v in value) + "]`"
+    if isinstance(value, bool):
+        return f"`{str(value).lower()}`"
+    return f"`{value}`"
+
+
+def section(key: str, cls, note: str) -> str:
+    hints = typing.get_type_hints(cls)
+    doc = inspect.cleandoc(cls.__doc__ or "").split("\n\n")[0].replace("\n", " ")
+    lines = [f"## `{key}` ({cls.__name__})", "", f"{note}. {doc}", "", "| key | type | default |",
+             "| --- | --- | --- |"]
+    for f in dataclasses.fields(cls):
+        lines.append(f"| `{f.name}` | {_type_name(hints[f.name])} | {_default(f)} |")
+    return "\n".join(lines) + "\n"
+
+
+def reference() -> str:
+    return HEADER + "".join("\n" + section(*s) for s in SECTIONS)
+
+
+if __name__ == "__main__":
+    print(reference(), end="")

@@ -1,0 +1,23 @@
+"""The documentation inside the project: the generated key reference is current, and nothing in
+the repository refers to files outside it."""
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+from cosim.keyref import reference
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_scenario_key_reference_is_current():
+    # regenerate with: python -m cosim.keyref > docs/scenario_keys.md
+    assert (ROOT / "docs" / "scenario_keys.md").read_text() == reference()
+
+
+def test_nothing_refers_outside_the_repository():
+    files = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
+    outside = [f for f in files if Path(f).suffix in (".py", ".md", ".yaml", ".toml", "")
+               and f != "tests/test_docs.py" and (ROOT / f).is_file()
+               and any(s in (ROOT / f).read_text(errors="ignore") for s in ("../shared", "design.md"))]
+    assert outside == []
