@@ -1,4 +1,4 @@
-"""Scenario files: load (``yaml.safe_load`` only), apply ``--set`` overrides, validate everything
+"""Scenario files: load (a stricter ``yaml.SafeLoader``, :mod:`cosim.yaml_input`), apply ``--set`` overrides, validate everything
 before any simulation starts, and build the typed scenario the runners consume.
 
 A scenario is a YAML mapping with a ``kind``:
@@ -21,8 +21,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
-import yaml
-
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import COMPONENT_TYPES, Circuit, CircuitError
@@ -37,6 +35,7 @@ from vehicle.track import TrackGeometry
 from .master import COUPLINGS
 from .results import k_label
 from .schema import ScenarioError, build, check_keys, coerce, k_values, require
+from .yaml_input import parse_yaml, read_yaml
 
 RIG_KINDS = ("rig_ramp", "rig_sine", "rig_stiffness", "rig_table2")
 CAR_KINDS = ("twist", "curve_entry")
@@ -326,16 +325,8 @@ class Scenario:
 
 
 def load_yaml(path: Path) -> Any:
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ScenarioError(path, [], f"cannot read the file ({exc.strerror})") from None
-    try:
-        return yaml.safe_load(text), text
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise ScenarioError(path, [], f"not valid YAML{where}: {getattr(exc, 'problem', exc)}") from None
+    """(data, text) of a scenario or parameter file, read strictly (see :mod:`cosim.yaml_input`)."""
+    return read_yaml(path)
 
 
 def apply_overrides(data: Dict[str, Any], overrides: Sequence[str], file) -> Dict[str, Any]:
@@ -347,6 +338,8 @@ def apply_overrides(data: Dict[str, Any], overrides: Sequence[str], file) -> Dic
             raise ScenarioError(file, ["--set"], f"expected key.path=value, got {item!r}")
         key, value = item.split("=", 1)
         parts = key.strip().split(".")
+        if not all(parts):
+            raise ScenarioError(file, ["--set"], f"expected key.path=value with a non-empty key path, got {item!r}")
         node = data
         for i, p in enumerate(parts[:-1]):
             if not isinstance(node.get(p), dict):
@@ -354,7 +347,7 @@ def apply_overrides(data: Dict[str, Any], overrides: Sequence[str], file) -> Dic
                     raise ScenarioError(file, parts[: i + 1], "--set cannot descend into a value that is not a mapping")
                 node[p] = {}
             node = node[p]
-        node[parts[-1]] = yaml.safe_load(value)
+        node[parts[-1]] = parse_yaml(value, file, ["--set", key.strip()])
     return data
 
 
@@ -372,7 +365,7 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         raise ScenarioError(path, ["kind"], f"unknown kind {kind!r} (expected one of {', '.join(KINDS)})")
     common = dict(file=path, kind=kind, name=str(data.get("name", path.stem)),
                   description=str(data.get("description", "")),
-                  k_W_per_K=tuple(k_override) if k_override else k_values(require(data, "k_W_per_K", path, []), path, ["k_W_per_K"]),
+                  k_W_per_K=k_values(list(k_override), path, ["--k"]) if k_override else k_values(require(data, "k_W_per_K", path, []), path, ["k_W_per_K"]),
                   content_sha256=hashlib.sha256(text.encode()).hexdigest(), overrides=tuple(overrides), raw=data)
     if kind in RIG_KINDS:
         check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", "test"), path, [])

@@ -58,8 +58,8 @@ def coerce(value: Any, tp, file, path: Sequence[str]):
             return float(value)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ScenarioError(file, path, f"expected a number, got {type(value).__name__} {value!r}")
-        if math.isnan(value):
-            raise ScenarioError(file, path, "expected a number, got NaN")
+        if not math.isfinite(value):
+            raise ScenarioError(file, path, f"expected a finite number, got {value}")
         return float(value)
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
@@ -123,9 +123,13 @@ def k_values(value: Any, file, path: Sequence[str]) -> Tuple[float, ...]:
     values = value if isinstance(value, (list, tuple)) else [value]
     out = []
     for i, v in enumerate(values):
-        k = coerce(v, float, file, [*path[:-1], f"{path[-1]}[{i}]"] if isinstance(value, (list, tuple)) else path)
+        where = [*path[:-1], f"{path[-1]}[{i}]"] if isinstance(value, (list, tuple)) else path
+        isothermal = isinstance(v, float) and v == math.inf
+        k = math.inf if isothermal else coerce(v, float, file, where)
         if k < 0:
-            raise ScenarioError(file, path, f"k must be >= 0 W/K (0 adiabatic, .inf isothermal), got {k}")
+            raise ScenarioError(file, where, f"k must be >= 0 W/K (0 adiabatic, .inf isothermal), got {k}")
+        if k in out:
+            raise ScenarioError(file, where, f"k = {v} appears twice: each case must be distinct")
         out.append(k)
     if not out:
         raise ScenarioError(file, path, "expected at least one k value")
