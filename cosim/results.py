@@ -62,25 +62,58 @@ def versions() -> Dict[str, str]:
     return out
 
 
+def source_commit() -> Dict[str, object]:
+    """The git commit of the pneumorail source when it runs from a checkout (and whether the
+    work tree had changes); empty when it is an installed copy or git is not available."""
+    import subprocess
+    root = Path(__file__).resolve().parent.parent
+    try:
+        run = lambda *args: subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True,  # noqa: E731
+                                           timeout=5, check=True).stdout.strip()
+        if Path(run("rev-parse", "--show-toplevel")).resolve() != root:
+            return {}
+        return {"commit": run("rev-parse", "HEAD"), "dirty": bool(run("status", "--porcelain", "--untracked-files=no"))}
+    except (OSError, subprocess.SubprocessError):
+        return {}
+
+
+def resolved_parameters(scenario) -> Dict[str, object]:
+    """Every parameter value the run used, defaults included: the scenario's typed sections."""
+    import dataclasses
+    sections = ("rig", "test", "vehicle", "circuit", "twist", "curve", "solver", "verify")
+    out = {name: dataclasses.asdict(getattr(scenario, name)) for name in sections
+           if dataclasses.is_dataclass(getattr(scenario, name, None))}
+    if getattr(scenario, "circuit", None) is not None and scenario.circuit.explicit is None:
+        out["circuit_components"] = {n: {"type": type(c).__name__, **dataclasses.asdict(c)}
+                                     for n, c in scenario.circuit.components().items()}
+    out["checks"] = [c.text for c in scenario.checks]
+    return out
+
+
 def write_run_json(out_dir: Path, scenario, wall_s: float, extra: Mapping[str, object] = ()) -> None:
-    """Provenance: what ran (scenario file, content hash, overrides, k values, settings), with
-    which versions, and how long it took."""
+    """Provenance: what ran (scenario file and every file it read, with their sha256, paths
+    relative to the scenario file; overrides; every parameter value actually used), with which
+    versions and source commit, and how long it took. Strict JSON: non-finite numbers are
+    written as the strings "inf", "-inf", "nan"."""
     info = {
         "scenario_file": str(scenario.file),
         "scenario_sha256": scenario.content_sha256,
+        "files_sha256": dict(getattr(scenario, "files_sha256", ())),
         "kind": scenario.kind,
         "name": scenario.name,
         "overrides": list(scenario.overrides),
         "k_W_per_K": [k_label(k) for k in scenario.k_W_per_K],
-        "settings": _jsonable(scenario.raw),
+        "settings": scenario.raw,
+        "resolved": resolved_parameters(scenario),
         "versions": versions(),
+        "source": source_commit(),
         "command": " ".join(sys.argv),
         "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "wall_time_s": round(wall_s, 3),
         **dict(extra),
     }
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "run.json").write_text(json.dumps(info, indent=2) + "\n")
+    (out_dir / "run.json").write_text(json.dumps(_jsonable(info), indent=2, allow_nan=False) + "\n")
 
 
 def _jsonable(v):
@@ -88,8 +121,10 @@ def _jsonable(v):
         return {str(k): _jsonable(x) for k, x in v.items()}
     if isinstance(v, (list, tuple)):
         return [_jsonable(x) for x in v]
-    if isinstance(v, float) and (math.isinf(v) or math.isnan(v)):
-        return str(v)
+    if isinstance(v, (float, np.floating)) and not math.isfinite(v):
+        return str(float(v))
+    if isinstance(v, np.generic):
+        return v.item()
     return v
 
 

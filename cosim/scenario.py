@@ -312,6 +312,8 @@ class Scenario:
     k_W_per_K: Tuple[float, ...]
     content_sha256: str
     overrides: Tuple[str, ...] = ()
+    #: (path relative to the scenario file, sha256) of every file read: the scenario, parameter files
+    files_sha256: Tuple[Tuple[str, str], ...] = ()
     rig: Optional[RigCircuit] = None
     test: Any = None
     vehicle: Optional[VehicleParams] = None
@@ -366,7 +368,8 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     common = dict(file=path, kind=kind, name=str(data.get("name", path.stem)),
                   description=str(data.get("description", "")),
                   k_W_per_K=k_values(list(k_override), path, ["--k"]) if k_override else k_values(require(data, "k_W_per_K", path, []), path, ["k_W_per_K"]),
-                  content_sha256=hashlib.sha256(text.encode()).hexdigest(), overrides=tuple(overrides), raw=data)
+                  content_sha256=hashlib.sha256(text.encode()).hexdigest(), overrides=tuple(overrides), raw=data,
+                  files_sha256=_files_read(path, data))
     if kind in RIG_KINDS:
         check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", "test"), path, [])
         rig = _rig_circuit(require(data, "circuit", path, [], dict), path)
@@ -411,6 +414,15 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         raise ScenarioError(path, ["verify", "levels"], f"Richardson extrapolation needs at least 2 halvings, got {verify.levels}")
     checks = _checks(data.get("checks", []), kind, path, common["k_W_per_K"], valve_settings)
     return Scenario(**common, vehicle=vehicle, circuit=circuit, solver=solver, verify=verify, checks=checks, **tests)
+
+
+def _files_read(path: Path, data: Mapping) -> Tuple[Tuple[str, str], ...]:
+    """(path relative to the scenario file, sha256) of the scenario and the vehicle parameter file."""
+    vehicle = data.get("vehicle")
+    vehicle = vehicle.get("file") if isinstance(vehicle, dict) else vehicle
+    files = [path] + ([path.parent / vehicle] if isinstance(vehicle, str) else [])
+    return tuple((str(f.relative_to(path.parent)) if f.is_relative_to(path.parent) else str(f),
+                  hashlib.sha256(f.read_bytes()).hexdigest()) for f in files if f.is_file())
 
 
 def _check_steps(solver: SolverSettings, duration_s: float, path) -> None:

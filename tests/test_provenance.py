@@ -1,0 +1,34 @@
+"""run.json: strict JSON holding every parameter value used, the hash of every file read, the
+package versions and the source commit."""
+from __future__ import annotations
+
+import hashlib
+import json
+
+from cosim.cli import main
+from helpers import SCENARIOS
+
+
+def _strict(text):
+    def refuse(name):
+        raise ValueError(f"bare {name} in run.json")
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_run_json_records_resolved_parameters_and_file_hashes(tmp_path):
+    out = tmp_path / "run"
+    assert main(["run", str(SCENARIOS / "twist_dqq.yaml"), "--k", "0,inf", "--set", "twist.ramp_s=0.5",
+                 "--set", "twist.hold_s=0.5", "--set", "vehicle.carbody_mass_kg=16000", "--jobs", "1",
+                 "--quiet", "--out", str(out)]) == 0
+    info = _strict((out / "run.json").read_text())
+    # files read, relative to the scenario file, with the hashes of their bytes
+    for rel in ("twist_dqq.yaml", "params/metro_car.yaml"):
+        assert info["files_sha256"][rel] == hashlib.sha256((SCENARIOS / rel).read_bytes()).hexdigest()
+    resolved = info["resolved"]
+    assert resolved["vehicle"]["carbody_mass_kg"] == 16000.0                # the override
+    assert resolved["vehicle"]["bogie_mass_kg"] == 1900.0                   # from the parameter file
+    assert resolved["circuit_components"]["tank_FL"]["V_m3"] == 0.027       # a default actually used
+    assert resolved["solver"]["macro_step_s"] > 0 and resolved["twist"]["hold_s"] == 0.5
+    assert info["k_W_per_K"] == ["0", "inf"]
+    assert "exudyn" in info["versions"]
+    assert set(info["source"]) in (set(), {"commit", "dirty"})
