@@ -1,0 +1,24 @@
+"""Wheel-rail contact physics, pure numpy/scipy (no exudyn, no pneumatics/cosim imports), so it
+can build the tables that exudyn user functions later interpolate.
+
+* :mod:`vehicle.wheelrail.profiles` -- SIMPACK ``.prw``/``.prr`` and 2-column profile readers;
+* :mod:`vehicle.wheelrail.geometry` -- rigid contact search, :class:`ContactTable`
+  (``from_profiles``, ``from_csv``, ``default``, ``at(y)``), equivalent conicity;
+* :mod:`vehicle.wheelrail.creep` -- Kalker linear theory (Table E.3), Hertz ellipse,
+  Shen-Hedrick-Elkins saturation, wheelset creepages;
+* ``python -m vehicle.wheelrail.derive_table`` rewrites the shipped default table.
+
+See ``docs/wheel_rail.md``.
+"""
+
+from .creep import (creep_forces, creepages, hertz_semi_axes, kalker_coefficients,
+                    kalker_linear, shen_hedrick_elkins)
+from .geometry import ContactGeometry, ContactState, ContactTable, PairSetup, default_setup
+from .profiles import Profile, read_profile, read_simpack_profile, write_simpack_profile
+
+__all__ = [
+    "ContactGeometry", "ContactState", "ContactTable", "PairSetup", "default_setup",
+    "Profile", "read_profile", "read_simpack_profile", "write_simpack_profile",
+    "creep_forces", "creepages", "hertz_semi_axes", "kalker_coefficients", "kalker_linear",
+    "shen_hedrick_elkins",
+]
