@@ -1,9 +1,11 @@
-"""Command line: ``pneumorail run | check | verify | compare``.
+"""Command line: ``pneumorail run | check | verify | compare | sweep``.
 
 Exit codes: 0 success (for ``check``: every limit holds; for ``verify``: every estimated
-discretisation error within the scenario's ``verify.tolerance``), 1 a limit is violated, an
-error estimate exceeds its tolerance or a run diverged, 2 bad input (the message names the
-file, the key path and what was expected).
+discretisation error within the scenario's ``verify.tolerance``; for ``sweep``: every case
+finished without diverging, and with ``--check`` every limit holds in every case), 1 a limit is
+violated, an error estimate exceeds its tolerance, a run diverged or a sweep case failed, 2 bad
+input (the message names the file, the key path and what was expected), 130 a sweep interrupted
+(Ctrl-C; rerun the same command to resume).
 """
 from __future__ import annotations
 
@@ -13,10 +15,11 @@ import sys
 from pathlib import Path
 from typing import List, Optional, Sequence
 
+from .executors import ExecutorUnavailable
 from .results import Progress
 from .schema import ScenarioError
 
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def _k_list(text: str) -> List[float]:
@@ -55,6 +58,25 @@ def build_parser() -> argparse.ArgumentParser:
                    help="override a scenario value (repeatable)")
     v.add_argument("--jobs", type=int, default=None, help="parallel processes for the k cases")
     v.add_argument("--quiet", action="store_true", help="no progress lines")
+    w = sub.add_parser("sweep", help="run a scenario for every combination of a grid of values (docs/sweeps.md)")
+    w.add_argument("scenario", type=Path, help="scenario YAML file, or a sweep file (with a 'sweep:' section)")
+    w.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2,...",
+                   help="a grid key and its values (YAML); the cases are the product of the grid keys (repeatable)")
+    w.add_argument("--zip", action="append", default=[], metavar="KEY=V1,V2,...",
+                   help="keys whose value lists (equal length) vary together, one more factor of the product (repeatable)")
+    w.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a value of the base scenario for every case (repeatable)")
+    w.add_argument("--k", type=_k_list, default=None, help="the k values [W/K] of every case, e.g. 0,inf")
+    w.add_argument("--out", type=Path, default=None, help="output folder (default: results/<sweep name>)")
+    w.add_argument("--jobs", type=int, default=None,
+                   help="cases run at once (default 2; 1: one after the other in this process)")
+    where = w.add_mutually_exclusive_group()
+    where.add_argument("--dask", action="store_true", help="run on a Dask LocalCluster of --jobs worker processes")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="run on an existing Dask cluster, e.g. tcp://host:8786 (shared file system)")
+    w.add_argument("--check", action="store_true",
+                   help="evaluate the base scenario's checks: in every case; exit 1 naming the cases that fail")
+    w.add_argument("--quiet", action="store_true", help="no progress lines")
     c = sub.add_parser("compare", help="overlay the results of several runs")
     c.add_argument("dirs", type=Path, nargs="+", help="output folders of earlier runs")
     c.add_argument("--out", type=Path, default=Path("results/compare"), help="folder for the comparison plots")
@@ -71,10 +93,56 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return EXIT_OK
         if args.command == "verify":
             return _verify(args)
+        if args.command == "sweep":
+            return _sweep(args)
         return _run(args)
     except ScenarioError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except ExecutorUnavailable as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def _sweep(args) -> int:
+    from .executors import make_executor
+    from .sweep import SweepSpec, is_sweep_file, load_sweep_file, parse_assignment, prepare, run_sweep
+    if is_sweep_file(args.scenario):
+        spec = load_sweep_file(args.scenario)
+    else:
+        spec = SweepSpec(args.scenario)
+    file = spec.source or spec.scenario_file
+    for option, items, target in (("--grid", args.grid, spec.grid), ("--zip", args.zip, spec.zip)):
+        for item in items:
+            key, values = parse_assignment(item, file, option, many=True)
+            spec.grid.pop(key, None)
+            spec.zip.pop(key, None)
+            target[key] = values
+            spec.origin[key] = option
+    for item in args.overrides:
+        key, value = parse_assignment(item, file, "--set", many=False)
+        spec.base[key] = value
+    if args.k:
+        spec.base_k = tuple(args.k)
+    jobs = 2 if args.jobs is None else args.jobs
+    if jobs < 1:
+        raise ScenarioError(file, ["--jobs"], f"expected at least 1 process, got {jobs}")
+    executor = make_executor(jobs, dask=args.dask, scheduler=args.scheduler)
+    prepared = prepare(spec, check=args.check)
+    out = args.out or Path("results") / (spec.name or f"{prepared.base.name}_sweep")
+    outcome = run_sweep(prepared, out, executor, quiet=args.quiet)
+    print(outcome.report())
+    print(f"results in {out}/ (sweep.csv, cases/<case>/)")
+    if outcome.interrupted:
+        done = sum(1 for c in prepared.cases if outcome.status(c) in ("ok", "diverged"))
+        print(f"interrupted: {done} of {len(prepared.cases)} cases finished and kept; rerun the same command "
+              f"to resume (finished cases are skipped)", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if args.check:
+        print(outcome.check_report())
+        if outcome.check_failures():
+            return EXIT_FAILED
+    return EXIT_OK if outcome.all_ok else EXIT_FAILED
 
 
 def _load(args):
@@ -114,6 +182,10 @@ def _verify(args) -> int:
 def _run(args) -> int:
     from .runner import run_scenario
     from .scenario import CHECK_METRICS
+    from .sweep import is_sweep_file
+    if is_sweep_file(args.scenario):
+        raise ScenarioError(args.scenario, [], f"this is a sweep file: pneumorail sweep {args.scenario}"
+                                               f"{' --check' if args.command == 'check' else ''}")
     scenario = _load(args)
     if args.command == "check" and not scenario.checks:
         metrics = CHECK_METRICS.get(scenario.kind)

@@ -1,0 +1,208 @@
+"""Where the cases of a sweep run: in this process, on a local process pool or on a Dask cluster.
+
+Every executor takes a module-level (picklable) function and tasks ``(key, args)`` and yields a
+:class:`Completed` per task as tasks finish, in completion order. ``error`` is a plain message
+(``TypeName: text``) when the task did not return: an exception that escaped the function, a
+worker process that died, a Dask ``KilledWorker``. Nothing else escapes: no
+``BrokenProcessPool``, no remote tracebacks.
+
+The process pool keeps at most ``jobs`` tasks in flight. When a worker process dies (killed,
+out of memory, a crash in a compiled library) every task then in flight is lost: each is queued
+again once and rerun *alone*, so a task that kills its worker again is the culprit and is
+reported as failed, while the innocent ones finish normally.
+"""
+from __future__ import annotations
+
+import multiprocessing
+import signal
+import sys
+import uuid
+from collections import deque
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from typing import Any, Callable, Iterable, Iterator, Optional, Sequence, Tuple
+
+Task = Tuple[str, Sequence[Any]]
+
+DASK_INSTALL_HINT = "pip install -e \".[dask]\" (or: pip install \"dask[distributed]\" xarray h5netcdf)"
+
+
+class ExecutorUnavailable(RuntimeError):
+    """The executor asked for cannot be used here (e.g. Dask is not installed)."""
+
+
+@dataclass
+class Completed:
+    key: str
+    result: Any = None
+    error: Optional[str] = None
+
+
+def message(exc: BaseException) -> str:
+    """A plain, picklable description of an exception (no traceback objects)."""
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+class Serial:
+    """Run the tasks one after the other in this process (``--jobs 1``)."""
+
+    def __init__(self) -> None:
+        self.running = 0
+        self.description = "in this process"
+
+    def run(self, fn: Callable, tasks: Iterable[Task]) -> Iterator[Completed]:
+        for key, args in tasks:
+            self.running = 1
+            try:
+                done = Completed(key, fn(*args))
+            except Exception as exc:                   # noqa: BLE001 -- reported, the sweep goes on
+                done = Completed(key, None, message(exc))
+            self.running = 0
+            yield done
+
+
+def _ignore_sigint() -> None:
+    """Pool workers leave Ctrl-C to the parent, which stops them (no traceback per worker)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _context():
+    # fork: workers start in milliseconds with everything imported (spawn would re-import numpy,
+    # exudyn and matplotlib in every worker); the sweep's parent holds no threads.
+    return multiprocessing.get_context("fork" if sys.platform.startswith("linux") else "spawn")
+
+
+class Pool:
+    """A local process pool of ``jobs`` workers (``--jobs N``, the default executor)."""
+
+    LOST = ("the worker process died while running this case alone (killed, or crashed: out of "
+            "memory, a signal, a fault in a compiled library)")
+
+    def __init__(self, jobs: int) -> None:
+        self.jobs = jobs
+        self.running = 0
+        self.description = f"on a pool of {jobs} processes"
+
+    def run(self, fn: Callable, tasks: Iterable[Task]) -> Iterator[Completed]:
+        queue = deque(tasks)
+        suspects = set()                       # in flight when a worker died: rerun alone
+        while queue:
+            pool = ProcessPoolExecutor(max_workers=min(self.jobs, len(queue)), mp_context=_context(),
+                                       initializer=_ignore_sigint)
+            inflight = {}
+            clean = False
+            try:
+                lost = []
+                while (queue or inflight) and not lost:
+                    while queue and len(inflight) < self.jobs:
+                        key, args = queue[0]
+                        alone = key in suspects
+                        if inflight and (alone or any(k in suspects for k, _ in inflight.values())):
+                            break
+                        queue.popleft()
+                        inflight[pool.submit(fn, *args)] = (key, args)
+                    self.running = len(inflight)
+                    done, _ = wait(list(inflight), return_when=FIRST_COMPLETED)
+                    for fut in done:
+                        key, args = inflight.pop(fut)
+                        self.running = len(inflight)
+                        try:
+                            result = fut.result()
+                        except BrokenProcessPool:
+                            lost.append((key, args))
+                            continue
+                        except Exception as exc:       # noqa: BLE001 -- e.g. an unpicklable result
+                            yield Completed(key, None, message(exc))
+                            continue
+                        yield Completed(key, result)
+                if lost:
+                    # the pool is broken: every future still in flight fails at once
+                    wait(list(inflight))
+                    for fut, (key, args) in list(inflight.items()):
+                        try:
+                            result = fut.result()
+                        except Exception:              # noqa: BLE001 -- BrokenProcessPool
+                            lost.append((key, args))
+                        else:
+                            yield Completed(key, result)
+                    inflight.clear()
+                    for key, args in reversed(lost):
+                        if key in suspects:
+                            yield Completed(key, None, self.LOST)
+                        else:
+                            suspects.add(key)
+                            queue.appendleft((key, args))
+                clean = True
+            finally:
+                self.running = 0
+                if not clean:                          # Ctrl-C or the consumer stopped: stop now
+                    for proc in list(getattr(pool, "_processes", {}).values()):
+                        proc.terminate()
+                    pool.shutdown(wait=False, cancel_futures=True)
+                else:
+                    pool.shutdown(wait=True)
+
+
+class Dask:
+    """Dask distributed: a ``LocalCluster`` of ``jobs`` single-threaded worker processes, or an
+    existing cluster at ``scheduler`` (its workers need pneumorail installed and the output
+    folder on a shared file system)."""
+
+    def __init__(self, jobs: int, scheduler: Optional[str] = None) -> None:
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            raise ExecutorUnavailable(f"{'--scheduler' if scheduler else '--dask'} needs Dask distributed, which is "
+                                      f"not installed: {DASK_INSTALL_HINT}") from None
+        self.jobs, self.scheduler = jobs, scheduler
+        self.running = 0
+        self.description = (f"on the Dask cluster at {scheduler}" if scheduler else
+                            f"on a Dask LocalCluster of {jobs} worker processes")
+
+    def run(self, fn: Callable, tasks: Iterable[Task]) -> Iterator[Completed]:
+        import logging
+
+        from distributed import Client, LocalCluster, as_completed
+        tasks = list(tasks)
+        if not tasks:
+            return
+        cluster = None
+        if self.scheduler:
+            try:
+                client = Client(self.scheduler, timeout="30s")
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise ExecutorUnavailable(f"cannot reach the Dask scheduler at {self.scheduler}: {message(exc)}") from None
+        else:
+            cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
+            client = Client(cluster)
+        try:
+            slots = max(1, sum(client.nthreads().values()))
+            tag = uuid.uuid4().hex[:8]
+            futures = {client.submit(fn, *args, key=f"pneumorail-case-{key}-{tag}", pure=False): key
+                       for key, args in tasks}
+            remaining = len(futures)
+            self.running = min(slots, remaining)
+            for fut in as_completed(futures):
+                key = futures[fut]
+                remaining -= 1
+                self.running = min(slots, remaining)
+                try:
+                    result = fut.result()
+                except Exception as exc:               # noqa: BLE001 -- KilledWorker, a remote error
+                    yield Completed(key, None, message(exc))
+                else:
+                    yield Completed(key, result)
+        finally:
+            self.running = 0
+            client.close()
+            if cluster is not None:
+                cluster.close()
+
+
+def make_executor(jobs: int, dask: bool = False, scheduler: Optional[str] = None):
+    if dask or scheduler:
+        return Dask(jobs, scheduler)
+    return Serial() if jobs == 1 else Pool(jobs)
