@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -11,7 +12,7 @@ from pneumatics.pipe import Pipe
 from vehicle.car import BELLOWS, WHEELS
 
 from .master import CoSimulation
-from .plots import Curve, Panel, k_legend
+from .plots import Curve, Panel, k_legend, save_panels
 from .results import Progress, k_label
 from .scenario import Scenario
 
@@ -54,21 +55,70 @@ def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]
     return record.arrays(), diagnosis, list(k_values)
 
 
+def _run_chunks(tasks) -> list:
+    """One worker's share: its chunks (see :func:`_worker_shares`), one after the other."""
+    return [_run_chunk(task) for task in tasks]
+
+
 def _chunks(k_values: Sequence[float], jobs: int) -> List[List[float]]:
     jobs = max(1, min(jobs, len(k_values)))
     return [list(k_values[i::jobs]) for i in range(jobs)]
 
 
+def _worker_shares(k_lists: Sequence[Sequence[float]], jobs: int) -> List[List[Tuple[int, List[float]]]]:
+    """The cases (variant, k) of every variant split over at most ``jobs`` workers with equal
+    numbers of cars (one more for the first ones), each share a list of (variant, k values)
+    chunks, a chunk being one co-simulation (one batched circuit).
+
+    The cases are laid out variant by variant, each variant's k values in the order of
+    :func:`_chunks` (k[0::n], k[1::n], ...), and cut into consecutive shares: a single variant
+    gets exactly the chunks of :func:`_chunks` (and so the same circuits, pneumatic steps and
+    results as before), several variants fill the workers one variant after the other (two
+    variants of 7 k on 2 workers: one variant per worker, all 7 k in one circuit)."""
+    cases = [(v, k) for v, ks in enumerate(k_lists) for chunk in _chunks(ks, jobs) for k in chunk]
+    workers = max(1, min(jobs, len(cases)))
+    sizes = [len(cases) // workers + (i < len(cases) % workers) for i in range(workers)]
+    shares, start = [], 0
+    for size in sizes:
+        share: List[Tuple[int, List[float]]] = []
+        for v, k in cases[start:start + size]:
+            if share and share[-1][0] == v:
+                share[-1][1].append(k)
+            else:
+                share.append((v, [k]))
+        shares.append(share)
+        start += size
+    return shares
+
+
 def simulate(scenario: Scenario, make_car: CarFactory, duration_s: float, label: Optional[str] = None):
     """Run every k of ``scenario`` (``solver.jobs`` processes); returns (k values in ascending
     order, record arrays (samples, ..., cases), divergence diagnoses). ``label``: show progress."""
-    chunks = _chunks(scenario.k_W_per_K, scenario.solver.jobs)
-    tasks = [(scenario, chunk, make_car, duration_s, label) for chunk in chunks]
-    if len(chunks) == 1:
-        results = [_run_chunk(tasks[0])]
+    return simulate_variants([scenario], make_car, duration_s, [label])[0]
+
+
+def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, duration_s: float,
+                      labels: Optional[Sequence[Optional[str]]] = None) -> list:
+    """Run every k of every variant (e.g. the valve settings of one scenario) on one pool of
+    ``solver.jobs`` processes (the first variant's), the cases shared out by
+    :func:`_worker_shares`; returns, per variant, what :func:`simulate` returns."""
+    labels = list(labels or [None] * len(variants))
+    shares = _worker_shares([v.k_W_per_K for v in variants], variants[0].solver.jobs)
+    tasks = [[(variants[v], ks, make_car, duration_s, labels[v]) for v, ks in share] for share in shares]
+    if len(tasks) == 1:
+        done = [_run_chunks(tasks[0])]
     else:
-        with ProcessPoolExecutor(len(chunks)) as pool:
-            results = list(pool.map(_run_chunk, tasks))
+        with ProcessPoolExecutor(len(tasks)) as pool:
+            done = list(pool.map(_run_chunks, tasks))
+    per_variant: List[list] = [[] for _ in variants]
+    for share, results in zip(shares, done):
+        for (v, _), result in zip(share, results):
+            per_variant[v].append(result)
+    return [_merge(results) for results in per_variant]
+
+
+def _merge(results):
+    """(k values in ascending order, record arrays, diagnoses) from the chunks of one variant."""
     ks, arrays, diagnoses = [], [], []
     for rec, diag, chunk in results:
         ks += chunk
@@ -83,6 +133,27 @@ def simulate(scenario: Scenario, make_car: CarFactory, duration_s: float, label:
     order = np.argsort(ks)                        # inf sorts last
     merged = {name: (v[..., order] if name != "t_s" else v) for name, v in merged.items()}
     return [ks[i] for i in order], merged, diagnoses
+
+
+#: a figure to draw: (path, panels, suptitle, ncols), the arguments of :func:`cosim.plots.save_panels`
+Figure = Tuple[Path, Sequence[Panel], Optional[str], int]
+
+
+def save_figures(figures: Sequence[Figure], jobs: int) -> None:
+    """Draw independent figures on up to ``jobs`` processes, the largest (most panels) first."""
+    figures = sorted(figures, key=lambda f: -len(f[1]))
+    workers = max(1, min(jobs, len(figures)))
+    if workers == 1:
+        for figure in figures:
+            _save_figure(figure)
+        return
+    with ProcessPoolExecutor(workers) as pool:
+        list(pool.map(_save_figure, figures))
+
+
+def _save_figure(figure: Figure) -> Path:
+    path, panels, suptitle, ncols = figure
+    return save_panels(path, panels, suptitle, ncols=ncols)
 
 
 def _pad(values: np.ndarray, n: int) -> np.ndarray:

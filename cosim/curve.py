@@ -5,16 +5,16 @@ from __future__ import annotations
 import dataclasses
 import time
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Sequence
 
 import numpy as np
 
 from pneumatics.circuit import Circuit
 from vehicle.car import BELLOWS, MetroCar
 
-from .car_runs import bellow_panels, curves_per_k, record_columns, simulate
+from .car_runs import bellow_panels, curves_per_k, record_columns, save_figures, simulate_variants
 from .criteria import window_mean
-from .plots import Panel, save_panels
+from .plots import Panel
 from .results import Progress, k_label, write_columns, write_rows, write_run_json
 from .runner import CaseMetrics, Outcome
 from .scenario import CurveTest, Scenario
@@ -59,10 +59,17 @@ def with_valves(scenario: Scenario, valves: bool) -> Scenario:
 
 def simulate_curve(scenario: Scenario, valves: bool, progress: bool = False):
     """Every k with the valves connected or not: (k values, record arrays, diagnoses, circuit)."""
-    variant = with_valves(scenario, valves)
-    label = f"{scenario.name} valves {'on' if valves else 'off'}" if progress else None
-    ks, rec, diagnoses = simulate(variant, make_car, scenario.curve.duration_s, label)
-    return ks, rec, diagnoses, Circuit(variant.circuit.components())
+    return simulate_curves(scenario, [valves], progress)[0]
+
+
+def simulate_curves(scenario: Scenario, valve_settings: Sequence[bool], progress: bool = False):
+    """Every k for each of ``valve_settings``, all cases on one pool of ``solver.jobs`` processes:
+    per setting, what :func:`simulate_curve` returns."""
+    variants = [with_valves(scenario, valves) for valves in valve_settings]
+    labels = [f"{scenario.name} valves {'on' if valves else 'off'}" if progress else None for valves in valve_settings]
+    runs = simulate_variants(variants, make_car, scenario.curve.duration_s, labels)
+    return [(ks, rec, diagnoses, Circuit(variant.circuit.components()))
+            for (ks, rec, diagnoses), variant in zip(runs, variants)]
 
 
 def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
@@ -71,8 +78,8 @@ def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
     progress(f"curve entry at {curve.speed_m_per_s:g} m/s: {curve.straight_m:g} m straight, {curve.transition_m:g} m "
              f"transition, R = {curve.radius_m:g} m; {len(scenario.k_W_per_K)} k values x valves {curve.valve_settings}")
     rows, runs, diagnoses, cases = [], {}, [], []
-    for valves in curve.valve_settings:
-        ks, rec, diag, circuit = simulate_curve(scenario, valves, progress=not progress.quiet)
+    for valves, (ks, rec, diag, circuit) in zip(curve.valve_settings,
+                                                simulate_curves(scenario, curve.valve_settings, not progress.quiet)):
         rec = {**rec, "roll_rel_rad": relative_roll_rad(scenario, rec)}
         runs[valves] = (ks, rec)
         diagnoses += [f"valves {'on' if valves else 'off'}: {d}" for d in diag]
@@ -87,7 +94,7 @@ def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
                          for i, name in enumerate(circuit.link_names) if name.startswith(VALVE_PREFIXES)})
             write_columns(out / "timeseries" / f"curve_valves={tag}_k={k_label(k)}.csv", cols)
     write_rows(out / "summary.csv", rows)
-    _plots(out, runs)
+    _plots(out, runs, scenario.solver.jobs)
     diverged = "; ".join(diagnoses) or None
     metrics = {m: _largest(r[m] for r in rows) for m in ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg",
                                                          "air_exhausted_kg")} if rows else {}
@@ -132,22 +139,25 @@ def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int, cur
     return row
 
 
-def _plots(out: Path, runs) -> None:
+def _plots(out: Path, runs, jobs: int = 1) -> None:
+    """The curve's figures, drawn on up to ``jobs`` processes."""
     panels: List[Panel] = []
     for valves, (ks, rec) in runs.items():
         per_k = curves_per_k(rec["t_s"], ks)
         panels.append(Panel(per_k(rec["roll_rel_rad"], 1e3), "time t [s]", "carbody roll to the track plane [mrad]",
                             f"valves {'connected' if valves else 'disconnected'}"))
-    save_panels(out / "fig9_roll.png", panels, "Carbody roll entering a curve (paper Fig. 9)", ncols=len(panels))
+    figures = [(out / "fig9_roll.png", panels, "Carbody roll entering a curve (paper Fig. 9)", len(panels))]
     for valves, (ks, rec) in runs.items():
         tag = "on" if valves else "off"
         per_k = curves_per_k(rec["t_s"], ks)
         heights = [Panel(per_k(rec["crushing_m"][:, i], 1e3), "time t [s]", f"crushing z_{b} [mm]", f"bellow {b}")
                    for i, b in enumerate(BELLOWS)]
-        save_panels(out / f"bellows_valves={tag}.png", heights + bellow_panels(rec, ks),
-                    f"Bellow crushing (+ compression), pressure and temperature, valves {tag}", ncols=2)
+        figures.append((out / f"bellows_valves={tag}.png", heights + bellow_panels(rec, ks),
+                        f"Bellow crushing (+ compression), pressure and temperature, valves {tag}", 2))
         if valves:
-            save_panels(out / "air_consumption.png",
-                        [Panel(per_k(rec["air_from_supply_kg"], 1e3), "time t [s]", "air injected from the supply [g]"),
-                         Panel(per_k(rec["air_to_atmosphere_kg"], 1e3), "time t [s]", "air exhausted to the atmosphere [g]")],
-                        "Air consumption of the levelling valves (paper Table 4)", ncols=2)
+            figures.append((out / "air_consumption.png",
+                            [Panel(per_k(rec["air_from_supply_kg"], 1e3), "time t [s]", "air injected from the supply [g]"),
+                             Panel(per_k(rec["air_to_atmosphere_kg"], 1e3), "time t [s]",
+                                   "air exhausted to the atmosphere [g]")],
+                            "Air consumption of the levelling valves (paper Table 4)", 2))
+    save_figures(figures, jobs)

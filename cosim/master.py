@@ -129,17 +129,41 @@ class CoSimulation:
     def step(self) -> None:
         """One macro-step (see the module docstring)."""
         t1 = self.t + self.H
+        F_start, K, F_rate, rate = self._force_laws()
+        self._advance_cars(F_start, K, F_rate, t1)
+        z1, zd1 = self._crushing()
+        motion = hermite_motion(self.t, t1, self.z, self.zd, z1, zd1)
+        with np.errstate(all="ignore"):               # a diverging column is diagnosed just below
+            # the motion starts at (z_n, zd_n) exactly, so RK4's first stage is ``rate``
+            x1 = advance(self.circuit, self.x, self.t, t1, motion, self.h_pneumatic, rate0=rate)
+        self._stop_diverged(x1, t1)
+        x1[:, ~self.active] = self.x[:, ~self.active]  # stopped cases stay frozen
+        self._F_end = F_start + self.H * F_rate + K * (z1 - self.z)  # what the cars feel at t1
+        self.x, self.t, self.z, self.zd = x1, t1, z1, zd1
+
+    def _force_laws(self):
+        """The bellow force laws of this step (see the module docstring), each (4, cases):
+        (F_s, K_n, (F_e - F_s) / H), and the circuit's rate d(state)/dt at (x_n, z_n, zd_n).
+
+        The held rate (zero crushing rate) behind dF/dt|_z comes from the same evaluation of the
+        circuit as that rate (:meth:`Circuit.derivatives_and_held`), bit for bit as a separate
+        evaluation would give it."""
         c = self.circuit
         F_now = c.bellow_forces_N(self.x, self.z)
-        if self.coupling == "linearised":
-            held_rate = c.derivatives(self.x, self.z, np.zeros_like(self.z))
-            half = 0.5 * self.H
-            dF_dt = (c.bellow_forces_N(self.x + half * held_rate, self.z) - F_now) / half
-            K = c.bellow_stiffness_N_per_m(self.x, self.z)
-            F_start = F_now if self._F_end is None else self._F_end
-            F_rate = (F_now + self.H * dF_dt - F_start) / self.H
-        else:
-            F_start, K, F_rate = F_now, np.zeros_like(F_now), np.zeros_like(F_now)
+        if self.coupling != "linearised":
+            zero = np.zeros_like(F_now)
+            return F_now, zero, zero, c.derivatives(self.x, self.z, self.zd)
+        rate, held_rate = c.derivatives_and_held(self.x, self.z, self.zd)
+        half = 0.5 * self.H
+        dF_dt = (c.bellow_forces_N(self.x + half * held_rate, self.z) - F_now) / half
+        K = c.bellow_stiffness_N_per_m(self.x, self.z)
+        F_start = F_now if self._F_end is None else self._F_end
+        F_rate = (F_now + self.H * dF_dt - F_start) / self.H
+        return F_start, K, F_rate, rate
+
+    def _advance_cars(self, F_start, K, F_rate, t1: float) -> None:
+        """Each running car gets its force laws and advances to ``t1``; one whose multibody
+        solver gives up is stopped."""
         for j in np.flatnonzero(self.active):
             car = self.cars[j]
             car.set_bellow_forces(F_start[:, j], K[:, j], F_rate[:, j])
@@ -147,18 +171,15 @@ class CoSimulation:
                 car.advance(t1)
             except RuntimeError as exc:               # the multibody solver gave up
                 self._stop(j, f"multibody solver failed advancing from t = {self.t:.6g} to {t1:.6g} s: {exc}")
-        z1, zd1 = self._crushing()
-        motion = hermite_motion(self.t, t1, self.z, self.zd, z1, zd1)
-        with np.errstate(all="ignore"):               # a diverging column is diagnosed just below
-            x1 = advance(self.circuit, self.x, self.t, t1, motion, self.h_pneumatic)
-        for j in np.flatnonzero(self.active):
+
+    def _stop_diverged(self, x1: np.ndarray, t1: float) -> None:
+        """Stop every running case whose circuit state left the physical range (one vectorised
+        test; the diagnosis of a failing case comes from :meth:`Circuit.check_state`)."""
+        for j in np.flatnonzero(self.active & ~self.circuit.physical_cases(x1)):
             try:
                 self.circuit.check_state(x1[:, j], t1)
             except CircuitDiverged as exc:
                 self._stop(j, str(exc))
-        x1[:, ~self.active] = self.x[:, ~self.active]  # stopped cases stay frozen
-        self._F_end = F_start + self.H * F_rate + K * (z1 - self.z)  # what the cars feel at t1
-        self.x, self.t, self.z, self.zd = x1, t1, z1, zd1
 
     def sample(self, record: Record) -> None:
         c = self.circuit

@@ -12,9 +12,9 @@ import numpy as np
 from vehicle.car import WHEELS, MetroCar
 
 from .criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading, window_drift, window_mean
-from .car_runs import bellow_panels, curves_per_k, record_columns, simulate
+from .car_runs import Figure, bellow_panels, curves_per_k, record_columns, save_figures, simulate_variants
 from .curve import with_valves
-from .plots import Panel, save_panels
+from .plots import Panel
 from .results import Progress, k_label, write_columns, write_rows, write_run_json
 from .runner import CaseMetrics, Outcome
 from .scenario import Scenario, TwistTest
@@ -89,11 +89,17 @@ def valve_settings(scenario: Scenario) -> Sequence[Optional[bool]]:
 def simulate_twist(scenario: Scenario, progress: Optional[Progress] = None, valves: Optional[bool] = None):
     """Every k of the twist scenario: (k values, record arrays, diagnoses). ``valves``: connect
     (True) or isolate (False) the levelling valves; None: as ``circuit.valves`` says."""
-    variant = scenario if valves is None else with_valves(scenario, valves)
-    label = None
-    if progress is not None and not progress.quiet:
-        label = scenario.name if valves is None else f"{scenario.name} valves {'on' if valves else 'off'}"
-    return simulate(variant, make_car, scenario.twist.duration_s, label)
+    return simulate_twists(scenario, [valves], progress)[0]
+
+
+def simulate_twists(scenario: Scenario, settings: Sequence[Optional[bool]], progress: Optional[Progress] = None):
+    """:func:`simulate_twist` for each of the valve ``settings``, all cases on one pool of
+    ``solver.jobs`` processes."""
+    variants = [scenario if valves is None else with_valves(scenario, valves) for valves in settings]
+    show = progress is not None and not progress.quiet
+    labels = [(scenario.name if valves is None else f"{scenario.name} valves {'on' if valves else 'off'}")
+              if show else None for valves in settings]
+    return simulate_variants(variants, make_car, scenario.twist.duration_s, labels)
 
 
 def twist_metrics(t_s: np.ndarray, dqq: np.ndarray, test: TwistTest, j: int) -> Dict[str, object]:
@@ -130,8 +136,7 @@ def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
     runs = {}
     diagnoses: List[str] = []
     Q0_N = None
-    for setting in settings:
-        ks, rec, diag = simulate_twist(scenario, progress, setting)
+    for setting, (ks, rec, diag) in zip(settings, simulate_twists(scenario, settings, progress)):
         valves = scenario.circuit.valves if setting is None else setting
         tag = "" if setting is None else f"valves={'on' if valves else 'off'}_"
         diagnoses += diag if setting is None else [f"valves {'on' if valves else 'off'}: {d}" for d in diag]
@@ -158,8 +163,9 @@ def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
                           {**record_columns(rec, j), **{f"dqq_{w}": dqq[:, i, j] for i, w in enumerate(WHEELS)}})
     write_rows(out / "summary.csv", rows)
     shown = _plot_wheels(rows)
-    for setting, (ks, rec, dqq) in runs.items():
-        _plots(out, ks, rec, dqq, test, _dqq_limit(scenario), shown, setting)
+    save_figures([figure for setting, (ks, rec, dqq) in runs.items()
+                  for figure in _figures(out, ks, rec, dqq, test, _dqq_limit(scenario), shown, setting)],
+                 scenario.solver.jobs)
     diverged = "; ".join(diagnoses) or None
     metrics = {m: _largest(r[m] for r in rows) for m in ("dqq_max", "dqq_qs_max", "dqq_drift")} if rows else {}
     write_run_json(out, scenario, time.perf_counter() - t0,
@@ -196,7 +202,9 @@ def _plot_wheels(rows) -> List[str]:
     return [w for w in WHEELS if w in PLOT_WHEELS or w in worst]
 
 
-def _plots(out: Path, ks, rec, dqq, test: TwistTest, limit: float, wheels: Sequence[str], setting: Optional[bool]) -> None:
+def _figures(out: Path, ks, rec, dqq, test: TwistTest, limit: float, wheels: Sequence[str],
+             setting: Optional[bool]) -> List[Figure]:
+    """The figures of one valve setting (see :func:`cosim.car_runs.save_figures`)."""
     Q = rec["wheel_load_N"]
     per_k = curves_per_k(rec["t_s"], ks)
     suffix = "" if setting is None else f"_valves={'on' if setting else 'off'}"
@@ -205,12 +213,12 @@ def _plots(out: Path, ks, rec, dqq, test: TwistTest, limit: float, wheels: Seque
     shown = "wheelsets 1 and 4" + (f" and the worst wheel{'s' if len(extra) > 1 else ''} {', '.join(extra)}" if extra else "")
     height = f"rail raised {test.height_m * 1e3:.0f} mm" + (
         f", bogie twisted {test.bogie_height_m * 1e3:.0f} mm" if test.bogie_base_m is not None else "")
-    save_panels(out / f"fig8_wheel_loads{suffix}.png",
-                [Panel(per_k(Q[:, WHEELS.index(w)], 1e-3), "time t [s]", f"wheel load Q_{w} [kN]", f"wheel {w}")
-                 for w in wheels], f"Vertical wheel-rail forces during the twist test, {shown} (paper Fig. 8); "
-                                   f"{height}{valves}", ncols=2)
-    save_panels(out / f"dqq{suffix}.png",
-                [Panel(per_k(dqq[:, WHEELS.index(w)]), "time t [s]", f"ΔQ/Q0 of wheel {w} [-]", f"wheel {w}",
-                       hlines=[(limit, f"limit {limit:g}")]) for w in wheels],
-                f"Wheel unloading ΔQ/Q0 (positive: unloaded){valves}", ncols=2)
-    save_panels(out / f"bellows{suffix}.png", bellow_panels(rec, ks), f"Bellow pressures and temperatures{valves}", ncols=2)
+    return [(out / f"fig8_wheel_loads{suffix}.png",
+             [Panel(per_k(Q[:, WHEELS.index(w)], 1e-3), "time t [s]", f"wheel load Q_{w} [kN]", f"wheel {w}")
+              for w in wheels], f"Vertical wheel-rail forces during the twist test, {shown} (paper Fig. 8); "
+                                f"{height}{valves}", 2),
+            (out / f"dqq{suffix}.png",
+             [Panel(per_k(dqq[:, WHEELS.index(w)]), "time t [s]", f"ΔQ/Q0 of wheel {w} [-]", f"wheel {w}",
+                    hlines=[(limit, f"limit {limit:g}")]) for w in wheels],
+             f"Wheel unloading ΔQ/Q0 (positive: unloaded){valves}", 2),
+            (out / f"bellows{suffix}.png", bellow_panels(rec, ks), f"Bellow pressures and temperatures{valves}", 2)]

@@ -175,11 +175,11 @@ class CircuitOutputs:
 
 def _table_groups(tables):
     """[(rows, x, y)]: the indices of the components that share each distinct (x, y) table, so that
-    one interpolation serves them all."""
+    one interpolation serves them all (rows: a slice when evenly spaced, see :func:`_rows`)."""
     groups = {}
     for i, (x, y) in enumerate(tables):
         groups.setdefault((tuple(x), tuple(y)), []).append(i)
-    return [(np.array(rows), np.array(x, float), np.array(y, float)) for (x, y), rows in groups.items()]
+    return [(_rows(rows), np.array(x, float), np.array(y, float)) for (x, y), rows in groups.items()]
 
 
 def _column(values) -> np.ndarray:
@@ -257,6 +257,9 @@ class Circuit:
         self._A0 = _column([self.components[n].A0_m2 for n in self.bellow_names])
         self._dAdz = _column([self.components[n].dA_dz_m for n in self.bellow_names])
         self._bellow_chamber = np.array([self.chamber_names.index(n) for n in self.bellow_names], dtype=int)
+        # every bellow at once: a Bellow whose fields are (bellows, 1) columns, for the vectorised laws
+        self._bellow_columns = Bellow(**{f: _column([getattr(self.components[n], f) for n in self.bellow_names])
+                                         for f in ("V0_m3", "dV_dz_m2", "A0_m2", "dA_dz_m")})
 
     def _node(self, link: str, field: str, name: str, chambers_only: bool = False) -> int:
         if name not in self._node_index:
@@ -335,7 +338,10 @@ class Circuit:
         # links whose flow is an ISO 6358 orifice law: fixed orifices, then valve sides
         self._orifice_links = np.r_[np.arange(self._sl_or.start, self._sl_or.stop),
                                     np.arange(self._sl_valve.start, self._sl_valve.stop)].astype(int)
-        self._pipe_a, self._pipe_b = self._a[self._sl_pipe], self._b[self._sl_pipe]
+        # node rows of the links' ends, as slices where evenly spaced (views instead of copies)
+        self._pipe_a, self._pipe_b = _rows(self._a[self._sl_pipe]), _rows(self._b[self._sl_pipe])
+        self._or_rows = _rows(self._orifice_links)
+        self._or_a, self._or_b = _rows(self._a[self._orifice_links]), _rows(self._b[self._orifice_links])
         lay = self.layout
         self._s_m, self._s_T, self._s_q, self._s_through = lay.m, lay.T, lay.q, lay.mass_through
         self._s_open, self._s_valve = lay.open_time, lay.valve_signal
@@ -352,7 +358,10 @@ class Circuit:
                                [comps[n].b_critical for n in valves] * 2)
         self._supply_tables = _table_groups([(v.supply_lever_m, v.supply_C_m3_per_sPa) for v in self._valves])
         self._exhaust_tables = _table_groups([(v.exhaust_lever_m, v.exhaust_C_m3_per_sPa) for v in self._valves])
-        self._dpv_tables = _table_groups([(v.dp_Pa, v.q_kg_per_s) for v in self._dpv])
+        # per distinct table: (link rows, their a-end and b-end node rows, table)
+        self._dpv_tables = [(_rows(links), _rows(self._a[links]), _rows(self._b[links]), xp, fp)
+                            for links, xp, fp in ((self._sl_dpv.start + np.arange(n_dpv)[rows], xp, fp) for rows, xp, fp
+                                                  in _table_groups([(v.dp_Pa, v.q_kg_per_s) for v in self._dpv]))]
         self._lever = np.zeros((n_v, len(self.bellow_names)))
         for i, n in enumerate(valves):
             sensed = comps[n].sensed_bellows
@@ -514,26 +523,25 @@ class Circuit:
         if qs.stop > qs.start:
             rho = 0.5 * (rho_n[a[qs]] + rho_n[b[qs]])
             w[qs] = pipe_flow_quasi_steady_kg_per_s(p_n[a[qs]], p_n[b[qs]], rho, self._qs_A, self._qs_K)
-        for rows, xp, fp in self._dpv_tables:
-            j = self._sl_dpv.start + rows
-            w[j] = differential_valve_flow_kg_per_s(p_n[a[j]], p_n[b[j]], xp, fp)
-        C = [C_or]
+        for links, ia, ib, xp, fp in self._dpv_tables:
+            w[links] = differential_valve_flow_kg_per_s(p_n[ia], p_n[ib], xp, fp)
         chain = None
+        C = np.empty((self._b_crit.shape[0], n_cases))     # fixed orifices, then valve supply and exhaust sides
+        C[:self._n_orifices] = C_or
         if self._valves:
             if self._valve_dynamics:
                 chain = self._valve_chain(x2, z2)
                 lever = chain[3]
             else:
                 lever = self._lever @ z2
-            for tables, sign in ((self._supply_tables, 1.0), (self._exhaust_tables, -1.0)):
-                C_side = np.empty((len(self._valves), n_cases))
+            nv, start = len(self._valves), self._n_orifices
+            for tables, sign, side in ((self._supply_tables, 1.0, C[start:start + nv]),
+                                       (self._exhaust_tables, -1.0, C[start + nv:])):
                 for rows, xp, fp in tables:
-                    C_side[rows] = lever_conductance(sign * lever[rows], xp, fp)
-                C.append(C_side)
-        C = np.concatenate(C)
+                    side[rows] = lever_conductance(sign * lever[rows], xp, fp)
         if C.size:
-            ia, ib = a[self._orifice_links], b[self._orifice_links]
-            w[self._orifice_links] = orifice_flow_kg_per_s(C, self._b_crit, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
+            ia, ib = self._or_a, self._or_b
+            w[self._or_rows] = orifice_flow_kg_per_s(C, self._b_crit, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
         return m, T, V, p, p_n, T_n, rho_n, w, chain, C[self._n_orifices:]
 
     def _per_bellow(self, values, x2: np.ndarray) -> np.ndarray:
@@ -543,37 +551,67 @@ class Circuit:
 
     def derivatives(self, x, z_m, zdot_m_per_s) -> np.ndarray:
         """d(state)/dt for state ``x`` (size,) or (size, cases) and bellow crushing and rate."""
+        x2, z2, zdot2 = self._inputs(x, z_m, zdot_m_per_s)
+        dx, terms = self._rates_at_crushing(x2, z2)
+        self._write_crushing_rate_terms(dx, x2, terms, zdot2)
+        return dx.reshape(x.shape)
+
+    def derivatives_and_held(self, x, z_m, zdot_m_per_s) -> tuple[np.ndarray, np.ndarray]:
+        """(d(state)/dt, d(state)/dt at zero crushing rate): the latter is ``derivatives(x, z_m, 0)``
+        bit for bit, from the same evaluation of the flows (they depend on the crushing only, not
+        on its rate); only the rows that the rate enters (temperatures through p dV/dt, heat and
+        work accumulators, valve signals) are computed twice."""
+        x2, z2, zdot2 = self._inputs(x, z_m, zdot_m_per_s)
+        dx, terms = self._rates_at_crushing(x2, z2)
+        held = dx.copy()
+        self._write_crushing_rate_terms(dx, x2, terms, zdot2)
+        self._write_crushing_rate_terms(held, x2, terms, np.zeros_like(zdot2))
+        return dx.reshape(x.shape), held.reshape(x.shape)
+
+    def _inputs(self, x, z_m, zdot_m_per_s):
+        """State (states x cases), crushing and its rate (bellows x cases)."""
+        x2 = x.reshape(self.layout.size, -1)
+        return x2, self._per_bellow(z_m, x2), self._per_bellow(zdot_m_per_s, x2)
+
+    def _rates_at_crushing(self, x2: np.ndarray, z2: np.ndarray):
+        """The rows of d(state)/dt that depend on the state and the crushing only (chamber masses,
+        pipe flows, link mass, boundary enthalpy, valve open times), and the terms the other rows
+        need: (dx with those rows written, (m, T, p, mdot, Hdot, chain))."""
         lay = self.layout
-        x2 = x.reshape(lay.size, -1)
-        z2, zdot2 = self._per_bellow(z_m, x2), self._per_bellow(zdot_m_per_s, x2)
-        cv = self.gas.cv_J_per_kgK
         m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = self._evaluate(x2, z2)
         a, b = self._a, self._b
-        Vdot = -self._Ez @ zdot2
         Hw = w * (self.gas.cp_J_per_kgK * np.where(w >= 0.0, T_n[a], T_n[b]))  # upstream total enthalpy
         mdot = self._incidence @ w                                                # eq. (1)
         Hdot = self._incidence @ Hw
+        dx = np.empty_like(x2)
+        dx[self._s_m] = mdot
+        pa, pb = self._pipe_a, self._pipe_b
+        dx[self._s_q] = pipe_flow_rate_kg_per_s2(x2[self._s_q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
+                                                 self._pipe_L, self._pipe_A, self._pipe_K)  # eq. (5)
+        dx[self._s_through] = w
+        dx[lay.enthalpy_in] = self._boundary_sign @ Hw
+        if self._valves:
+            np.sign(C_valve, out=dx[self._s_open])  # C >= 0 (tables checked): 1 while open, 0 when shut
+        return dx, (m, T, p, mdot, Hdot, chain)
+
+    def _write_crushing_rate_terms(self, dx: np.ndarray, x2: np.ndarray, terms, zdot2: np.ndarray) -> None:
+        """Write the rows of d(state)/dt that the crushing rate enters: temperatures (eq. 2, with
+        the heat flow of eq. 8 or the isothermal one), heat and work accumulators, valve signals."""
+        lay = self.layout
+        m, T, p, mdot, Hdot, chain = terms
+        cv = self.gas.cv_J_per_kgK
+        Vdot = -self._Ez @ zdot2
         Qdot = heat_flow_into_W(self._k_finite, T, self.atmosphere.T_K)          # eq. (8), physical sign
         if self._any_isothermal:
             Qdot = np.where(self._isothermal, isothermal_heat_flow_W(T, p, mdot, Hdot, Vdot, cv), Qdot)
         dT = temperature_rate_K_per_s(m, T, p, mdot, Hdot, Qdot, Vdot, cv)       # eq. (2)
         if self._any_isothermal:
             dT = np.where(self._isothermal, 0.0, dT)
-        dx = np.empty_like(x2)
-        dx[self._s_m] = mdot
         dx[self._s_T] = dT
-        pa, pb = self._pipe_a, self._pipe_b
-        dx[self._s_q] = pipe_flow_rate_kg_per_s2(x2[self._s_q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
-                                                 self._pipe_L, self._pipe_A, self._pipe_K)  # eq. (5)
-        dx[self._s_through] = w
         dx[lay.heat_in] = Qdot.sum(axis=0)
         dx[lay.work_in] = -(p * Vdot).sum(axis=0)
-        dx[lay.enthalpy_in] = self._boundary_sign @ Hw
-        if self._valves:
-            np.sign(C_valve, out=dx[self._s_open])  # C >= 0 (tables checked): 1 while open, 0 when shut
-            if self._valve_dynamics:
-                dx[self._s_valve] = self._valve_signal_rates(x2, chain, zdot2)
-        return dx.reshape(x.shape)
+        if self._valve_dynamics:
+            dx[self._s_valve] = self._valve_signal_rates(x2, chain, zdot2)
 
     def outputs(self, x, z_m) -> CircuitOutputs:
         """Pressures, temperatures, masses, volumes, link flows and bellow forces (eq. 4)."""
@@ -606,8 +644,7 @@ class Circuit:
         z2 = self._per_bellow(z, x2)
         p = self.bellow_pressures_Pa(x2, z2)
         n = np.where(self._isothermal, 1.0, self.gas.gamma)
-        K = np.array([bellow_stiffness_N_per_m(self.components[name], z2[j], p[j], self.atmosphere.p_Pa, n)
-                      for j, name in enumerate(self.bellow_names)])
+        K = bellow_stiffness_N_per_m(self._bellow_columns, z2, p, self.atmosphere.p_Pa, n)
         return K.reshape(z.shape)
 
     def total_mass_kg(self, x) -> np.ndarray:
@@ -668,6 +705,15 @@ class Circuit:
         V = self._V0 - self._Ez @ self._per_bellow(z_m, x2)
         return float(min(np.min(x2[self._s_m]), np.min(x2[self._s_T]),
                          np.min(V / self._V0) - self.MIN_VOLUME_FRACTION))
+
+    def physical_cases(self, x) -> np.ndarray:
+        """(cases,) True where :meth:`check_state` would pass: finite positive masses and
+        temperatures, finite pipe flows and valve signals (one vectorised test over every case)."""
+        lay = self.layout
+        x2 = x.reshape(lay.size, -1)
+        chambers = x2[:lay.T.stop]                    # masses then temperatures
+        ok = np.all(chambers > 0.0, axis=0) & np.all(np.isfinite(chambers), axis=0)
+        return ok & np.all(np.isfinite(x2[lay.q]), axis=0) & np.all(np.isfinite(x2[lay.valve_signal]), axis=0)
 
     def check_state(self, x, t_s: float) -> None:
         """Raise :class:`CircuitDiverged` naming the component if a state is non-finite or non-physical."""

@@ -16,7 +16,6 @@ import math
 from typing import Callable, Tuple
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from .circuit import Circuit
 
@@ -40,15 +39,16 @@ def stable_step_s(circuit: Circuit, x: np.ndarray, h_max_s: float = 1e-3, couran
 
 
 def rk4(f: Callable[[float, np.ndarray], np.ndarray], x: np.ndarray, t0_s: float, t1_s: float, n_steps: int,
-        observe: Callable[[float, np.ndarray], None] | None = None) -> np.ndarray:
+        observe: Callable[[float, np.ndarray], None] | None = None, rate0: np.ndarray | None = None) -> np.ndarray:
     """Classical fixed-step RK4 of dx/dt = f(t, x) over [t0, t1] in ``n_steps`` equal steps.
 
-    ``observe(t, x)`` is called after every step (for recording a trajectory).
+    ``observe(t, x)`` is called after every step (for recording a trajectory). ``rate0``, if given,
+    must be f(t0, x): the first stage of the first step takes it instead of evaluating f again.
     """
     h = (t1_s - t0_s) / n_steps
     t = t0_s
     for i in range(n_steps):
-        k1 = f(t, x)
+        k1 = rate0 if i == 0 and rate0 is not None else f(t, x)
         k2 = f(t + 0.5 * h, x + 0.5 * h * k1)
         k3 = f(t + 0.5 * h, x + 0.5 * h * k2)
         k4 = f(t + h, x + h * k3)
@@ -67,10 +67,12 @@ def circuit_rhs(circuit: Circuit, motion: Motion) -> Callable[[float, np.ndarray
     return f
 
 
-def advance(circuit: Circuit, x: np.ndarray, t0_s: float, t1_s: float, motion: Motion, h_max_s: float = 1e-3) -> np.ndarray:
-    """Integrate from t0 to t1 with classical RK4 in equal sub-steps no longer than ``h_max_s``."""
+def advance(circuit: Circuit, x: np.ndarray, t0_s: float, t1_s: float, motion: Motion, h_max_s: float = 1e-3,
+            rate0: np.ndarray | None = None) -> np.ndarray:
+    """Integrate from t0 to t1 with classical RK4 in equal sub-steps no longer than ``h_max_s``.
+    ``rate0``: the derivative at (t0, x) under ``motion(t0)``, if already known (see :func:`rk4`)."""
     n = max(1, math.ceil((t1_s - t0_s) / h_max_s - 1e-9))
-    return rk4(circuit_rhs(circuit, motion), x, t0_s, t1_s, n)
+    return rk4(circuit_rhs(circuit, motion), x, t0_s, t1_s, n, rate0=rate0)
 
 
 def absolute_tolerances(circuit: Circuit, rtol: float) -> np.ndarray:
@@ -92,6 +94,8 @@ def simulate(circuit: Circuit, x0: np.ndarray, t_end_s: float, motion: Motion, *
     A failed integration is returned too (``sol.success`` False, ``sol.t``/``sol.y`` up to the
     failure) so that the caller can keep what was computed and diagnose it; it stops as soon as
     a chamber stops being physical (see Circuit.physical_margin) instead of crawling on."""
+    from scipy.integrate import solve_ivp  # here: importing it costs ~0.15 s that co-simulations never need
+
     def non_physical(t, x):
         return circuit.physical_margin(x, motion(t)[0])
     non_physical.terminal = True

@@ -99,7 +99,7 @@ import numpy as np
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
-from .guidance import TrackSampler
+from .guidance import shared_sampler
 from .params import VehicleParams
 from .track import TrackGeometry
 
@@ -112,6 +112,11 @@ EXUDYN_TESTED_MINOR = "1.13"
 
 _OUT = exu.OutputVariableType
 esym = exu.symbolic
+
+
+def _four_floats(values) -> list[float]:
+    """(4,) values as a list of floats; None = zeros."""
+    return [0.0] * 4 if values is None else np.asarray(values, dtype=float).reshape(4).tolist()
 
 
 class MetroCar:
@@ -180,6 +185,7 @@ class MetroCar:
 
         rail0 = self._rail_at(0.0)
         self._rail_cache = (0.0, rail0)  # (t, heights) of the last preStep evaluation
+        self._rail_set = None  # (heights, rates) last given to the contacts' symbolic variables
 
         self.SC = exu.SystemContainer()
         self.mbs = self.SC.AddSystem()
@@ -222,7 +228,7 @@ class MetroCar:
         if not straight:
             raise ValueError("the track must be straight and level along x under the whole car "
                              f"at t = 0 (wheelsets at s = {s} m): start on the initial straight")
-        self._sampler = TrackSampler(track)
+        self._sampler = shared_sampler(track)
         self._guided = True
         self._canted = any(getattr(seg, "cant_rad", 0.0) != 0.0 for seg in track.segments)
 
@@ -518,9 +524,12 @@ class MetroCar:
         z0 = zc if t0 == tc else self._rail_at(t0)
         z1 = self._rail_at(t, state)
         v = (z1 - z0) / (t - t0) if t > t0 else np.zeros(8)
-        for (rz, rv), zj, vj in zip(self._rail_vars, z1.tolist(), v.tolist()):
-            rz.SetValue(zj)
-            rv.SetValue(vj)
+        values = (z1.tolist(), v.tolist())
+        if values != self._rail_set:  # held rails (e.g. after the twist ramp): nothing to set
+            for (rz, rv), zj, vj in zip(self._rail_vars, *values):
+                rz.SetValue(zj)
+                rv.SetValue(vj)
+            self._rail_set = values
         self._rail_cache = (t, z1)
         return True
 
@@ -603,20 +612,30 @@ class MetroCar:
         relative rotation)."""
         if self._bellow_t == self._t:
             return
-        get, body = self.mbs.GetObjectOutput, self.mbs.GetObjectOutputBody
+        get = self.mbs.GetObjectOutput
         h0 = self._bellow_height_m
-        w_carbody = np.asarray(body(self._carbody, _OUT.AngularVelocity))
+        w_frames = self._mid_frame_angular_velocities()
         z, zdot = [], []
         for k, co in enumerate(self._bellows):
-            bogie = self._bogies[k // 2]
-            d = get(co, _OUT.DisplacementLocal)
-            v = get(co, _OUT.VelocityLocal)
-            A = np.asarray(body(bogie, _OUT.RotationMatrix)).reshape(3, 3)
-            w = A.T @ (0.5 * (w_carbody + np.asarray(body(bogie, _OUT.AngularVelocity))))
-            z.append(h0 - d[2])
-            zdot.append(-(v[2] - (w[0] * d[1] - w[1] * d[0])))
+            d0, d1, d2 = get(co, _OUT.DisplacementLocal).tolist()
+            v2 = float(get(co, _OUT.VelocityLocal)[2])
+            w0, w1 = w_frames[k // 2]
+            z.append(h0 - d2)
+            zdot.append(-(v2 - (w0 * d1 - w1 * d0)))
         self._z, self._zdot = np.array(z), np.array(zdot)
         self._bellow_t = self._t
+
+    def _mid_frame_angular_velocities(self) -> list[tuple[float, float]]:
+        """Per bogie, the x and y components of the angular velocity of the mid-frame between
+        its frame and the carbody (the mean of the two bodies'), in the bogie frame's axes."""
+        body = self.mbs.GetObjectOutputBody
+        w_carbody = np.asarray(body(self._carbody, _OUT.AngularVelocity))
+        out = []
+        for bogie in self._bogies:
+            A = np.asarray(body(bogie, _OUT.RotationMatrix)).reshape(3, 3)
+            w = A.T @ (0.5 * (w_carbody + np.asarray(body(bogie, _OUT.AngularVelocity))))
+            out.append((float(w[0]), float(w[1])))
+        return out
 
     def bellow_crushing(self) -> tuple[np.ndarray, np.ndarray]:
         """Bellow crushing z [m] and its rate [m/s], each (4,) in :data:`BELLOWS` order.
@@ -645,14 +664,11 @@ class MetroCar:
 
         Note: a jump of F_N between calls enters generalized-alpha with about half an internal
         step of delay (the step starts from the old acceleration)."""
-        F = np.asarray(F_N, dtype=float).reshape(4)
-        dF = np.zeros(4) if dF_dz_N_per_m is None else np.asarray(dF_dz_N_per_m, float).reshape(4)
-        Fdot = np.zeros(4) if dF_dt_N_per_s is None else np.asarray(dF_dt_N_per_s, float).reshape(4)
-        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(dF)) and np.all(np.isfinite(Fdot))):
+        F, dF, Fdot = (_four_floats(v) for v in (F_N, dF_dz_N_per_m, dF_dt_N_per_s))
+        if not all(map(math.isfinite, F + dF + Fdot)):
             raise ValueError(f"non-finite bellow force law: F={F}, dF/dz={dF}, dF/dt={Fdot}")
         self._bellow_state()
-        for (Fv, Kv, Fdv, z0v), Fk, Kk, Fdk, zk in zip(self._bellow_vars, F.tolist(), dF.tolist(),
-                                                       Fdot.tolist(), self._z.tolist()):
+        for (Fv, Kv, Fdv, z0v), Fk, Kk, Fdk, zk in zip(self._bellow_vars, F, dF, Fdot, self._z.tolist()):
             Fv.SetValue(Fk)
             Kv.SetValue(Kk)
             Fdv.SetValue(Fdk)
