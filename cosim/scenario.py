@@ -28,8 +28,7 @@ from pneumatics.layouts import BELLOWS, car_circuit
 from pneumatics.pipe import Pipe
 from pneumatics.rig import bellow_tank_components
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
-from vehicle.car import WHEELS, MetroCar
-from vehicle.params import VehicleParams
+from vehicle.params import WHEELS, VehicleParams
 from vehicle.track import TrackGeometry
 
 from .master import COUPLINGS
@@ -617,6 +616,7 @@ def _vehicle(value, file) -> VehicleParams:
 def _check_car_builds(vehicle: VehicleParams, source, file) -> None:
     """Build the car once (~0.1 s): constraints between parameters (e.g. the bellow's upper plate
     above its lower one) fail here, as bad input, not later inside a worker process."""
+    from vehicle.car import MetroCar  # exudyn: only for car scenarios
     try:
         MetroCar(vehicle)
     except ValueError as exc:

@@ -181,3 +181,14 @@ def test_set_overrides_a_single_field_of_a_vehicle_parameter_file():
     assert all(getattr(changed.vehicle, f) == v for f, v in others.items())
     with pytest.raises(ScenarioError, match="vehicle"):
         load_scenario(SCENARIOS / "curve_entry.yaml", ["vehicle.no_such_field=1"])
+
+
+@pytest.mark.parametrize("name", ["rig_table2.yaml", "rig_stiffness.yaml"])
+def test_loading_a_rig_scenario_imports_no_exudyn(name):
+    # a fresh interpreter: the rig needs only the pneumatics
+    import subprocess
+    import sys
+    code = ("import sys; from cosim.scenario import load_scenario; "
+            f"load_scenario({str(SCENARIOS / name)!r}); print(any('exudyn' in m for m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"

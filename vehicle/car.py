@@ -100,11 +100,9 @@ from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from .guidance import shared_sampler
-from .params import VehicleParams
+from .params import BELLOWS, WHEELS, VehicleParams  # noqa: F401 (BELLOWS, WHEELS re-exported)
 from .track import TrackGeometry
 
-BELLOWS = ("FL", "FR", "RL", "RR")
-WHEELS = ("1L", "1R", "2L", "2R", "3L", "3R", "4L", "4R")
 
 #: exudyn minor version this module was written and measured against (the API changes between
 #: minor versions; tests/test_vehicle.py fails loudly on any other)

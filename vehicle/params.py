@@ -16,6 +16,11 @@ annotations), so a generic loader can fill the dataclass by introspection.
 """
 from dataclasses import dataclass
 
+#: Bellows (airsprings): front/rear bogie, left/right in the running direction.
+BELLOWS = ("FL", "FR", "RL", "RR")
+#: Wheels: wheelset 1..4 from the front, left/right in the running direction.
+WHEELS = ("1L", "1R", "2L", "2R", "3L", "3R", "4L", "4R")
+
 
 @dataclass(frozen=True)
 class VehicleParams:
