@@ -43,7 +43,9 @@ def build_parser() -> argparse.ArgumentParser:
                         ("check", "run a scenario and check the limits of its 'checks:' section")):
         s = sub.add_parser(name, help=help_)
         s.add_argument("scenario", type=Path, help="scenario YAML file")
-        s.add_argument("--out", type=Path, default=None, help="output folder (default: results/<scenario name>)")
+        s.add_argument("--out", type=Path, default=None,
+                       help="output folder (default: results/<scenario name>, plus a hash of --set/--k if given)")
+        s.add_argument("--overwrite", action="store_true", help="replace a previous run in the output folder")
         s.add_argument("--k", type=_k_list, default=None, help="override the k values [W/K], e.g. 0,10,inf")
         s.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a scenario value, e.g. --set twist.hold_s=10 (repeatable)")
@@ -102,6 +104,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except ExecutorUnavailable as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OSError as exc:                       # a result that could not be written (disk full ...)
+        if exc.filename is None:
+            raise
+        print(f"error: cannot write {exc.filename}: {exc.strerror}; the output folder is marked INCOMPLETE",
+              file=sys.stderr)
+        return EXIT_FAILED
 
 
 def _sweep(args) -> int:
@@ -180,6 +188,7 @@ def _verify(args) -> int:
 
 
 def _run(args) -> int:
+    from .outdir import OutputFolder, default_folder
     from .runner import run_scenario
     from .scenario import CHECK_METRICS
     from .sweep import is_sweep_file
@@ -192,9 +201,10 @@ def _run(args) -> int:
         hint = (f"add e.g. checks: ['{metrics[0]} <= ...'] (metrics: {', '.join(metrics)})" if metrics
                 else f"{scenario.kind} scenarios have no checkable metrics; use 'run'")
         raise ScenarioError(scenario.file, ["checks"], f"no checks to evaluate: {hint}")
-    out = args.out or Path("results") / scenario.name
+    out = args.out or default_folder(scenario.name, args.overrides, args.k)
     progress = Progress(scenario.name, quiet=args.quiet)
-    outcome = run_scenario(scenario, out, progress)
+    with OutputFolder(out, args.overwrite):
+        outcome = run_scenario(scenario, out, progress)
     print(outcome.report())
     print(f"results in {out}/")
     if outcome.diverged:

@@ -4,9 +4,11 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 import platform
 import sys
 import time
+from contextlib import contextmanager
 from importlib import metadata
 from pathlib import Path
 from typing import Dict, Iterable, Mapping, Sequence
@@ -14,19 +16,40 @@ from typing import Dict, Iterable, Mapping, Sequence
 import numpy as np
 
 
+@contextmanager
+def atomic_write(path: Path, mode: str = "w", **kwargs):
+    """Write ``path`` through a temporary file in the same folder, renamed over it only when
+    complete: a reader never sees half a file, and a failed write (disk full) leaves no cut
+    file behind (the error still propagates, with the file's name)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        with tmp.open(mode, **kwargs) as fh:
+            yield fh
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        if exc.filename is None or Path(exc.filename) == tmp:
+            raise OSError(exc.errno, exc.strerror, str(path)) from None
+        raise
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 def write_columns(path: Path, columns: Mapping[str, Sequence[float]]) -> None:
     """A CSV of equal-length numeric columns (header = column names, which carry units)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
     names = list(columns)
     data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
-    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
+    with atomic_write(path) as fh:
+        np.savetxt(fh, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
 
 
 def write_rows(path: Path, rows: Iterable[Mapping[str, object]]) -> None:
     """A CSV with one row per mapping (header: every key that appears; missing cells are nan)."""
     rows = list(rows)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
+    with atomic_write(path, newline="") as fh:
         if not rows:
             return
         header = list(dict.fromkeys(key for row in rows for key in row))   # union, in first-seen order
@@ -112,8 +135,8 @@ def write_run_json(out_dir: Path, scenario, wall_s: float, extra: Mapping[str, o
         "wall_time_s": round(wall_s, 3),
         **dict(extra),
     }
-    out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "run.json").write_text(json.dumps(_jsonable(info), indent=2, allow_nan=False) + "\n")
+    with atomic_write(out_dir / "run.json") as fh:
+        fh.write(json.dumps(_jsonable(info), indent=2, allow_nan=False) + "\n")
 
 
 def _jsonable(v):

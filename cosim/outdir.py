@@ -1,0 +1,88 @@
+"""Output folders that never mix two runs and say when they are incomplete.
+
+Before anything is simulated, :class:`OutputFolder` checks that the folder can be written, that
+no other run is writing into it (a lock file holding the writer's process id) and that it does
+not hold a previous run (refused unless ``overwrite``, which clears it first). While the run
+lasts the folder holds an ``INCOMPLETE`` marker; it is removed only when the run finished and
+every file was written, so a folder left by a crash, an interrupt or a full disk says so.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+from pathlib import Path
+from typing import Optional, Sequence
+
+from .schema import ScenarioError
+
+LOCK = ".pneumorail.lock"
+INCOMPLETE = "INCOMPLETE"
+#: Files whose presence marks a folder as holding a run.
+RUN_MARKERS = ("run.json", "summary.csv", "sweep.csv", INCOMPLETE, LOCK)
+
+
+def default_folder(name: str, overrides: Sequence[str] = (), k: Optional[Sequence[float]] = None,
+                   suffix: str = "") -> Path:
+    """``results/<name><suffix>``, plus a short hash of the ``--set``/``--k`` overrides when there
+    are any, so that a quick experiment never lands in the baseline's folder."""
+    tag = ""
+    if overrides or k:
+        text = "\n".join(sorted(overrides)) + f"\nk={list(k) if k else ''}"
+        tag = "_" + hashlib.sha256(text.encode()).hexdigest()[:8]
+    return Path("results") / f"{name}{suffix}{tag}"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+class OutputFolder:
+    """Context manager around one run's output folder (module doc). Errors are
+    :class:`ScenarioError` on ``--out`` (bad input: exit 2), raised before anything runs."""
+
+    def __init__(self, path: Path, overwrite: bool = False):
+        self.path, self.overwrite = Path(path), overwrite
+
+    def _refuse(self, message: str):
+        raise ScenarioError(self.path, ["--out"], message)
+
+    def __enter__(self) -> Path:
+        p = self.path
+        if p.exists() and not p.is_dir():
+            self._refuse("exists and is not a folder")
+        lock = p / LOCK
+        if lock.exists():
+            try:
+                pid = int(lock.read_text().strip() or 0)
+            except (OSError, ValueError):
+                pid = 0
+            if pid and pid != os.getpid() and _alive(pid):
+                self._refuse(f"another run (process {pid}) is writing into this folder")
+        if p.is_dir() and any((p / m).exists() for m in RUN_MARKERS):
+            if not self.overwrite:
+                self._refuse("holds a previous run; choose another --out or add --overwrite to replace it")
+            for entry in p.iterdir():
+                shutil.rmtree(entry) if entry.is_dir() and not entry.is_symlink() else entry.unlink()
+        try:
+            p.mkdir(parents=True, exist_ok=True)
+            fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+            with os.fdopen(fd, "w") as fh:
+                fh.write(str(os.getpid()))
+            (p / INCOMPLETE).write_text("this run has not finished writing its results\n")
+        except FileExistsError:
+            self._refuse("another run started writing into this folder just now")
+        except OSError as exc:
+            self._refuse(f"cannot be written ({exc.strerror})")
+        return p
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            (self.path / INCOMPLETE).unlink(missing_ok=True)
+        (self.path / LOCK).unlink(missing_ok=True)
