@@ -1,7 +1,7 @@
 """Running cars co-simulated with their circuit, one car per k value, k cases split over processes."""
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
@@ -98,23 +98,53 @@ def simulate(scenario: Scenario, make_car: CarFactory, duration_s: float, label:
 
 
 def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, duration_s: float,
-                      labels: Optional[Sequence[Optional[str]]] = None) -> list:
+                      labels: Optional[Sequence[Optional[str]]] = None,
+                      on_done: Optional[Callable[[int, tuple, Optional[Callable]], None]] = None) -> list:
     """Run every k of every variant (e.g. the valve settings of one scenario) on one pool of
     ``solver.jobs`` processes (the first variant's), the cases shared out by
-    :func:`_worker_shares`; returns, per variant, what :func:`simulate` returns."""
+    :func:`_worker_shares`; returns, per variant, what :func:`simulate` returns.
+
+    ``on_done(v, result, submit)``: called in this process as soon as every case of variant
+    ``v`` is done (in order of completion), ``result`` what :func:`simulate` returns for it,
+    while other variants may still be running: their post-processing overlaps the simulation.
+    ``submit(fn, *args)`` queues work on a pool worker that has finished its share (picklable
+    ``fn``), or is None if no such worker exists (all in this process, or every variant done);
+    the call returns once all submitted work has finished, and re-raises its errors."""
     labels = list(labels or [None] * len(variants))
     shares = _worker_shares([v.k_W_per_K for v in variants], variants[0].solver.jobs)
     tasks = [[(variants[v], ks, make_car, duration_s, labels[v]) for v, ks in share] for share in shares]
+    per_variant: List[list] = [[None] * sum(v == w for share in shares for w, _ in share) for v in range(len(variants))]
+    missing = [len(chunks) for chunks in per_variant]
+    merged: List[Optional[tuple]] = [None] * len(variants)
+    slots = [[] for _ in shares]  # per share: (variant, index of the chunk within its variant)
+    seen = [0] * len(variants)
+    for i, share in enumerate(shares):
+        for v, _ in share:
+            slots[i].append((v, seen[v]))
+            seen[v] += 1
+
+    def collect(i: int, results, submit) -> None:
+        for (v, n), result in zip(slots[i], results):
+            per_variant[v][n] = result
+            missing[v] -= 1
+            if missing[v] == 0:
+                merged[v] = _merge(per_variant[v])
+                if on_done is not None:
+                    on_done(v, merged[v], submit if any(missing) else None)
+
     if len(tasks) == 1:
-        done = [_run_chunks(tasks[0])]
+        collect(0, _run_chunks(tasks[0]), None)
     else:
+        extra = []
         with ProcessPoolExecutor(len(tasks)) as pool:
-            done = list(pool.map(_run_chunks, tasks))
-    per_variant: List[list] = [[] for _ in variants]
-    for share, results in zip(shares, done):
-        for (v, _), result in zip(share, results):
-            per_variant[v].append(result)
-    return [_merge(results) for results in per_variant]
+            def submit(fn, *args):
+                extra.append(pool.submit(fn, *args))
+            futures = {pool.submit(_run_chunks, task): i for i, task in enumerate(tasks)}
+            for future in as_completed(futures):
+                collect(futures[future], future.result(), submit)
+            for future in extra:
+                future.result()
+    return merged
 
 
 def _merge(results):

@@ -5,14 +5,15 @@ from __future__ import annotations
 import dataclasses
 import time
 from pathlib import Path
-from typing import Dict, List, Sequence
+from typing import Collection, Dict, List, Sequence
 
 import numpy as np
 
 from pneumatics.circuit import Circuit
 from vehicle.car import BELLOWS, MetroCar
 
-from .car_runs import bellow_panels, curves_per_k, record_columns, save_figures, simulate_variants
+from .car_runs import (Figure, _save_figure, bellow_panels, curves_per_k, record_columns, save_figures,
+                        simulate_variants)
 from .criteria import window_mean
 from .plots import Panel
 from .results import Progress, k_label, write_columns, write_rows, write_run_json
@@ -77,13 +78,24 @@ def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
     curve = scenario.curve
     progress(f"curve entry at {curve.speed_m_per_s:g} m/s: {curve.straight_m:g} m straight, {curve.transition_m:g} m "
              f"transition, R = {curve.radius_m:g} m; {len(scenario.k_W_per_K)} k values x valves {curve.valve_settings}")
-    rows, runs, diagnoses, cases = [], {}, [], []
-    for valves, (ks, rec, diag, circuit) in zip(curve.valve_settings,
-                                                simulate_curves(scenario, curve.valve_settings, not progress.quiet)):
+    settings = list(curve.valve_settings)
+    variants = [with_valves(scenario, valves) for valves in settings]
+    labels = [f"{scenario.name} valves {'on' if valves else 'off'}" if not progress.quiet else None
+              for valves in settings]
+    per_setting: List[tuple] = [None] * len(settings)  # (rows, cases, diagnoses) per valve setting
+    runs_by: List[tuple] = [None] * len(settings)
+    drawn = set()  # settings whose bellow figure was drawn while the simulation went on
+
+    def finished(v: int, result, submit) -> None:
+        """A valve setting's time series and summary rows (and, while another setting still
+        runs, its bellow figure on the worker it freed)."""
+        valves = settings[v]
+        ks, rec, diag = result
+        circuit = Circuit(variants[v].circuit.components())
         rec = {**rec, "roll_rel_rad": relative_roll_rad(scenario, rec)}
-        runs[valves] = (ks, rec)
-        diagnoses += [f"valves {'on' if valves else 'off'}: {d}" for d in diag]
+        runs_by[v] = (ks, rec)
         tag = "on" if valves else "off"
+        rows, cases = [], []
         for j, k in enumerate(ks):
             rows.append(_summary_row(valves, k, rec, j, curve, circuit.valve_names))
             cases.append(CaseMetrics(k, valves, {m: rows[-1][m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}))
@@ -93,8 +105,18 @@ def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
             cols.update({f"q_{name}_kg_per_s": rec["link_flow_kg_per_s"][:, i, j]
                          for i, name in enumerate(circuit.link_names) if name.startswith(VALVE_PREFIXES)})
             write_columns(out / "timeseries" / f"curve_valves={tag}_k={k_label(k)}.csv", cols)
+        per_setting[v] = (rows, cases, [f"valves {tag}: {d}" for d in diag])
+        if submit is not None:
+            submit(_save_figure, _bellow_figure(out, valves, ks, rec))
+            drawn.add(valves)
+
+    simulate_variants(variants, make_car, curve.duration_s, labels, on_done=finished)
+    rows = [r for rows_v, _, _ in per_setting for r in rows_v]
+    cases = [c for _, cases_v, _ in per_setting for c in cases_v]
+    diagnoses = [d for _, _, diag_v in per_setting for d in diag_v]
+    runs = {valves: run for valves, run in zip(settings, runs_by)}
     write_rows(out / "summary.csv", rows)
-    _plots(out, runs, scenario.solver.jobs)
+    _plots(out, runs, scenario.solver.jobs, skip=drawn)
     diverged = "; ".join(diagnoses) or None
     metrics = {m: _largest(r[m] for r in rows) for m in ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg",
                                                          "air_exhausted_kg")} if rows else {}
@@ -139,8 +161,19 @@ def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int, cur
     return row
 
 
-def _plots(out: Path, runs, jobs: int = 1) -> None:
-    """The curve's figures, drawn on up to ``jobs`` processes."""
+def _bellow_figure(out: Path, valves: bool, ks, rec) -> Figure:
+    """The bellow crushing, pressure and temperature figure of one valve setting."""
+    tag = "on" if valves else "off"
+    per_k = curves_per_k(rec["t_s"], ks)
+    heights = [Panel(per_k(rec["crushing_m"][:, i], 1e3), "time t [s]", f"crushing z_{b} [mm]", f"bellow {b}")
+               for i, b in enumerate(BELLOWS)]
+    return (out / f"bellows_valves={tag}.png", heights + bellow_panels(rec, ks),
+            f"Bellow crushing (+ compression), pressure and temperature, valves {tag}", 2)
+
+
+def _plots(out: Path, runs, jobs: int = 1, skip: Collection[bool] = ()) -> None:
+    """The curve's figures, drawn on up to ``jobs`` processes (``skip``: valve settings whose
+    bellow figure is drawn already)."""
     panels: List[Panel] = []
     for valves, (ks, rec) in runs.items():
         per_k = curves_per_k(rec["t_s"], ks)
@@ -148,12 +181,9 @@ def _plots(out: Path, runs, jobs: int = 1) -> None:
                             f"valves {'connected' if valves else 'disconnected'}"))
     figures = [(out / "fig9_roll.png", panels, "Carbody roll entering a curve (paper Fig. 9)", len(panels))]
     for valves, (ks, rec) in runs.items():
-        tag = "on" if valves else "off"
         per_k = curves_per_k(rec["t_s"], ks)
-        heights = [Panel(per_k(rec["crushing_m"][:, i], 1e3), "time t [s]", f"crushing z_{b} [mm]", f"bellow {b}")
-                   for i, b in enumerate(BELLOWS)]
-        figures.append((out / f"bellows_valves={tag}.png", heights + bellow_panels(rec, ks),
-                        f"Bellow crushing (+ compression), pressure and temperature, valves {tag}", 2))
+        if valves not in skip:
+            figures.append(_bellow_figure(out, valves, ks, rec))
         if valves:
             figures.append((out / "air_consumption.png",
                             [Panel(per_k(rec["air_from_supply_kg"], 1e3), "time t [s]", "air injected from the supply [g]"),
