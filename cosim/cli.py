@@ -39,27 +39,25 @@ def _k_list(text: str) -> List[float]:
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="pneumorail", description=__doc__.split("\n")[0])
     sub = p.add_subparsers(dest="command", required=True)
+    def scenario_options(parser, out_default: str) -> None:
+        """Options every command that runs one scenario shares."""
+        parser.add_argument("--out", type=Path, default=None, help=f"output folder (default: {out_default})")
+        parser.add_argument("--k", type=_k_list, default=None, help="override the k values [W/K], e.g. 0,10,inf")
+        parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                            help="override a scenario value, e.g. --set twist.hold_s=10 (repeatable)")
+        parser.add_argument("--jobs", type=int, default=None, help="parallel processes for the k cases")
+        parser.add_argument("--quiet", action="store_true", help="no progress lines")
+
     for name, help_ in (("run", "run a scenario and write its results"),
                         ("check", "run a scenario and check the limits of its 'checks:' section")):
         s = sub.add_parser(name, help=help_)
         s.add_argument("scenario", type=Path, help="scenario YAML file")
-        s.add_argument("--out", type=Path, default=None,
-                       help="output folder (default: results/<scenario name>, plus a hash of --set/--k if given)")
+        scenario_options(s, "results/<scenario name>, plus a hash of --set/--k if given")
         s.add_argument("--overwrite", action="store_true", help="replace a previous run in the output folder")
-        s.add_argument("--k", type=_k_list, default=None, help="override the k values [W/K], e.g. 0,10,inf")
-        s.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                       help="override a scenario value, e.g. --set twist.hold_s=10 (repeatable)")
-        s.add_argument("--jobs", type=int, default=None, help="parallel processes for the k cases")
-        s.add_argument("--quiet", action="store_true", help="no progress lines")
     v = sub.add_parser("verify", help="rerun with every step halved, estimate the discretisation error (Richardson)")
     v.add_argument("scenario", type=Path, help="scenario YAML file (twist or curve_entry)")
     v.add_argument("--levels", type=int, default=None, help="number of halvings (default: the scenario's verify.levels, 2)")
-    v.add_argument("--out", type=Path, default=None, help="output folder (default: results/<scenario name>_verify)")
-    v.add_argument("--k", type=_k_list, default=None, help="override the k values [W/K], e.g. 0,inf")
-    v.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scenario value (repeatable)")
-    v.add_argument("--jobs", type=int, default=None, help="parallel processes for the k cases")
-    v.add_argument("--quiet", action="store_true", help="no progress lines")
+    scenario_options(v, "results/<scenario name>_verify")
     w = sub.add_parser("sweep", help="run a scenario for every combination of a grid of values (docs/sweeps.md)")
     w.add_argument("scenario", type=Path, help="scenario YAML file, or a sweep file (with a 'sweep:' section)")
     w.add_argument("--grid", action="append", default=[], metavar="KEY=V1,V2,...",
