@@ -17,7 +17,8 @@ def test_scenario_key_reference_is_current():
 
 def test_nothing_refers_outside_the_repository():
     files = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
-    outside = [f for f in files if Path(f).suffix in (".py", ".md", ".yaml", ".toml", "")
-               and f != "tests/test_docs.py" and (ROOT / f).is_file()
-               and any(s in (ROOT / f).read_text(errors="ignore") for s in ("../shared", "design.md"))]
+    # the patterns are assembled so that this file does not match itself
+    patterns = ("../" + "shared", "design" + ".md")
+    outside = [f for f in files if Path(f).suffix in (".py", ".md", ".yaml", ".toml", "") and (ROOT / f).is_file()
+               and any(s in (ROOT / f).read_text(errors="ignore") for s in patterns)]
     assert outside == []
