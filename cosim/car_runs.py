@@ -8,6 +8,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from pneumatics.circuit import Circuit
+from pneumatics.orifice import Orifice
 from pneumatics.pipe import Pipe
 from vehicle.car import BELLOWS, WHEELS
 
@@ -36,11 +37,11 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
 
 def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:
     """Bellow pressures that carry the static load, eq. (4) solved for p at z = 0; a chamber with no
-    initial pressure of its own that a pipe joins to a bellow (its auxiliary tank) starts at that
-    bellow's pressure, so the circuit starts at rest."""
+    initial pressure of its own that a pipe or an orifice (a throttle) joins to a bellow (its
+    auxiliary tank) starts at that bellow's pressure, so the circuit starts at rest."""
     p0 = {b: p_atm_Pa + F / components[b].area_m2(0.0) for b, F in zip(BELLOWS, F0_N)}
     for c in components.values():
-        if isinstance(c, Pipe):
+        if isinstance(c, (Pipe, Orifice)):
             for bellow, other in ((c.a, c.b), (c.b, c.a)):
                 if bellow in p0 and other not in p0 and getattr(components.get(other), "p0_Pa", 0) is None:
                     p0[other] = p0[bellow]
