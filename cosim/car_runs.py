@@ -12,6 +12,7 @@ from pneumatics.orifice import Orifice
 from pneumatics.pipe import Pipe
 from vehicle.car import BELLOWS, WHEELS
 
+from .interrupts import install_in_worker
 from .master import CoSimulation
 from .plots import Curve, Panel, k_legend, save_panels
 from .results import Progress, k_label
@@ -137,7 +138,7 @@ def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, durati
         collect(0, _run_chunks(tasks[0]), None)
     else:
         extra = []
-        with ProcessPoolExecutor(len(tasks)) as pool:
+        with ProcessPoolExecutor(len(tasks), initializer=install_in_worker) as pool:
             def submit(fn, *args):
                 extra.append(pool.submit(fn, *args))
             futures = {pool.submit(_run_chunks, task): i for i, task in enumerate(tasks)}

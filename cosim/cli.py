@@ -10,6 +10,7 @@ input (the message names the file, the key path and what was expected), 130 a sw
 from __future__ import annotations
 
 import argparse
+import signal
 import math
 import sys
 from pathlib import Path
@@ -186,7 +187,8 @@ def _verify(args) -> int:
 
 
 def _run(args) -> int:
-    from .outdir import OutputFolder, default_folder
+    from . import interrupts
+    from .outdir import INCOMPLETE, OutputFolder, default_folder
     from .runner import run_scenario
     from .scenario import CHECK_METRICS
     from .sweep import is_sweep_file
@@ -201,8 +203,14 @@ def _run(args) -> int:
         raise ScenarioError(scenario.file, ["checks"], f"no checks to evaluate: {hint}")
     out = args.out or default_folder(scenario.name, args.overrides, args.k)
     progress = Progress(scenario.name, quiet=args.quiet)
-    with OutputFolder(out, args.overwrite):
+    with interrupts.handled(), OutputFolder(out, args.overwrite):
         outcome = run_scenario(scenario, out, progress)
+    if interrupts.stop_requested():
+        name = signal.Signals(interrupts.received_signal()).name
+        (out / INCOMPLETE).write_text(f"interrupted by {name}: the run stopped before its end\n")
+        print(f"interrupted by {name}: the results computed until then are in {out}/ (run.json: status "
+              f"interrupted)", file=sys.stderr)
+        return interrupts.exit_code()
     print(outcome.report())
     print(f"results in {out}/")
     if outcome.diverged:

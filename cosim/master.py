@@ -43,6 +43,8 @@ from typing import Callable, Dict, List, Optional, Sequence
 import numpy as np
 
 from pneumatics.circuit import Circuit, CircuitDiverged
+
+from .interrupts import stop_requested
 from pneumatics.integrate import advance, stable_step_s
 
 COUPLINGS = ("linearised", "explicit")
@@ -214,13 +216,18 @@ class CoSimulation:
             progress: Optional[Callable[[str, bool], None]] = None) -> tuple[Record, Optional[str]]:
         """Advance to ``t_end_s``, sampling every ``output_interval_s``. Returns the record and,
         if a case diverged, the diagnoses (that case's record holds NaN from then on; the run
-        stops early only when every case has stopped)."""
+        stops early only when every case has stopped). A SIGINT/SIGTERM (:mod:`cosim.interrupts`)
+        stops it after the current macro-step, keeping the record so far, with a diagnosis."""
         record = Record()
         every = max(1, round(output_interval_s / self.H))
         n = round(t_end_s / self.H)
         self.sample(record)
         for i in range(1, n + 1):
             self.step()
+            if stop_requested():
+                self.sample(record)
+                self.diagnoses.append(f"interrupted at t = {self.t:.6g} s (results up to then kept)")
+                break
             if i % every == 0 or i == n or not np.any(self.active):
                 self.sample(record)
             if not np.any(self.active):

@@ -15,6 +15,8 @@ from typing import Dict, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from .interrupts import stop_requested
+
 
 @contextmanager
 def atomic_write(path: Path, mode: str = "w", **kwargs):
@@ -133,6 +135,7 @@ def write_run_json(out_dir: Path, scenario, wall_s: float, extra: Mapping[str, o
         "command": " ".join(sys.argv),
         "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "wall_time_s": round(wall_s, 3),
+        "status": "interrupted" if stop_requested() else "complete",
         **dict(extra),
     }
     with atomic_write(out_dir / "run.json") as fh:
