@@ -139,14 +139,16 @@ def write_run_json(out_dir: Path, scenario, wall_s: float, extra: Mapping[str, o
         **dict(extra),
     }
     with atomic_write(out_dir / "run.json") as fh:
-        fh.write(json.dumps(_jsonable(info), indent=2, allow_nan=False) + "\n")
+        fh.write(json.dumps(jsonable(info), indent=2, allow_nan=False) + "\n")
 
 
-def _jsonable(v):
+def jsonable(v):
+    """``v`` for strict JSON: non-finite numbers as the strings inf, -inf, nan; numpy scalars as
+    Python numbers."""
     if isinstance(v, dict):
-        return {str(k): _jsonable(x) for k, x in v.items()}
+        return {str(k): jsonable(x) for k, x in v.items()}
     if isinstance(v, (list, tuple)):
-        return [_jsonable(x) for x in v]
+        return [jsonable(x) for x in v]
     if isinstance(v, (float, np.floating)) and not math.isfinite(v):
         return str(float(v))
     if isinstance(v, np.generic):

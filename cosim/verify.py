@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from .results import Progress, read_rows, write_rows
+from .results import Progress, atomic_write, jsonable, read_rows, write_rows
 from .scenario import Scenario
 
 #: Relative differences below this are the solvers' noise floor (Newton tolerance, round-off).
@@ -153,13 +153,10 @@ def verify(scenario: Scenario, out: Path, levels: int, progress: Progress) -> Tu
     run_json = out / "level_0" / "run.json"
     info = json.loads(run_json.read_text())
     info["verify"] = {"levels": levels, "tolerance": scenario.verify.tolerance,
-                      "estimates": [_jsonable(e.row()) for e in found]}
-    run_json.write_text(json.dumps(info, indent=2, allow_nan=False))
+                      "estimates": [e.row() for e in found]}
+    with atomic_write(run_json) as fh:
+        fh.write(json.dumps(jsonable(info), indent=2, allow_nan=False) + "\n")
     return found, "; ".join(diverged) or None
-
-
-def _jsonable(row: Dict[str, object]) -> Dict[str, object]:
-    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
 
 
 def report(found: Sequence[Estimate], tolerance: float) -> str:

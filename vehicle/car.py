@@ -622,11 +622,14 @@ class MetroCar:
         """Crushing and rate of the bellows at the current state (cached per time).
 
         z = h0 - d_z with d = p_upper - p_lower in the connector's mid-frame J, the very
-        quantity the force law uses (see :meth:`_add_airspring`). Its rate is the time
+        quantity the force law uses (see :meth:`_add_airspring`). Its rate approximates the time
         derivative of that component: exudyn's ``VelocityLocal`` is the relative velocity
         expressed in J, which misses the rotation of J itself, d(A^T r)/dt = A^T r' - w x d
-        (w: J's angular velocity in J, the mean of the two bodies', to second order in their
-        relative rotation)."""
+        (w: J's angular velocity, taken as the mean of the two bodies'). Exact only to second
+        order in the bodies' relative rotation: over the twist ramp its integral overstates the
+        crushing change by 2.7 um of 17 mm (measured against a directional derivative, see
+        cosim/monolithic.py). The co-simulation's Hermite interpolant ends on the exact crushing
+        at both ends of each step, so only the shape within a step sees it."""
         if self._bellow_t == self._t:
             return
         get = self.mbs.GetObjectOutput
