@@ -22,9 +22,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from cosim.cli import _k_list  # noqa: E402
-from cosim.criteria import static_wheel_loads, wheel_unloading  # noqa: E402
 from cosim.scenario import load_scenario  # noqa: E402
-from cosim.twist import simulate_twist  # noqa: E402
+from cosim.twist import simulate  # noqa: E402
 
 
 def run(k, hold, H, h_mech):
@@ -32,9 +31,10 @@ def run(k, hold, H, h_mech):
                       [f"twist.hold_s={hold}", f"solver.macro_step_s={H}", f"solver.mechanics_step_s={h_mech}",
                        "solver.output_interval_s=0.01"], k)
     t0 = time.perf_counter()
-    ks, rec, diag = simulate_twist(s)
-    Q = rec["wheel_load_N"]
-    return Q, wheel_unloading(Q, static_wheel_loads(Q[0])), time.perf_counter() - t0
+    ds, _ = simulate(s)
+    order = ("time", "wheel", "case")
+    return (ds["wheel_load_N"].transpose(*order).values, ds["dqq"].transpose(*order).values,
+            time.perf_counter() - t0)
 
 
 def main():

@@ -46,7 +46,7 @@ def scenario(kind: str, k: float, duration: float | None):
     sc = load_scenario(SCENARIOS / "curve_entry.yaml", ["solver.jobs=1"], [k])
     if duration:
         sc = dataclasses.replace(sc, curve=dataclasses.replace(sc.curve, duration_s=duration))
-    return curve_mod.with_valves(sc, True), sc.curve.duration_s, curve_mod.make_car
+    return sc.with_valves(True), sc.curve.duration_s, curve_mod.make_car
 
 
 def headlines(kind, sc, rec):

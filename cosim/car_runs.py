@@ -1,22 +1,24 @@
-"""Running cars co-simulated with their circuit, one car per k value, k cases split over processes."""
+"""Running cars co-simulated with their circuit, one car per k value, k cases split over processes,
+gathered into one labelled Dataset (:mod:`cosim.series`)."""
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from pathlib import Path
+from concurrent.futures import ProcessPoolExecutor
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
+import xarray as xr
 
 from pneumatics.circuit import Circuit
 from pneumatics.orifice import Orifice
 from pneumatics.pipe import Pipe
-from vehicle.car import BELLOWS, WHEELS
+from vehicle.params import BELLOWS
 
+from .experiments import Scenario
 from .interrupts import install_in_worker
 from .master import CoSimulation
-from .plots import Curve, Panel, k_legend, save_panels
+from .plots import Curve, Panel, k_legend
 from .results import Progress, k_label
-from .scenario import Scenario
+from .series import car_dataset, concat_cases
 
 #: make_car(scenario) -> a car with the vehicle.car.MetroCar interface (module-level: picklable)
 CarFactory = Callable[[Scenario], object]
@@ -93,131 +95,65 @@ def _worker_shares(k_lists: Sequence[Sequence[float]], jobs: int) -> List[List[T
     return shares
 
 
-def simulate(scenario: Scenario, make_car: CarFactory, duration_s: float, label: Optional[str] = None):
-    """Run every k of ``scenario`` (``solver.jobs`` processes); returns (k values in ascending
-    order, record arrays (samples, ..., cases), divergence diagnoses). ``label``: show progress."""
-    return simulate_variants([scenario], make_car, duration_s, [label])[0]
-
-
 def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, duration_s: float,
-                      labels: Optional[Sequence[Optional[str]]] = None,
-                      on_done: Optional[Callable[[int, tuple, Optional[Callable]], None]] = None) -> list:
+                      labels: Optional[Sequence[Optional[str]]] = None) -> List[Tuple[List[Tuple[int, list]], List[str]]]:
     """Run every k of every variant (e.g. the valve settings of one scenario) on one pool of
     ``solver.jobs`` processes (the first variant's), the cases shared out by
-    :func:`_worker_shares`; returns, per variant, what :func:`simulate` returns.
-
-    ``on_done(v, result, submit)``: called in this process as soon as every case of variant
-    ``v`` is done (in order of completion), ``result`` what :func:`simulate` returns for it,
-    while other variants may still be running: their post-processing overlaps the simulation.
-    ``submit(fn, *args)`` queues work on a pool worker that has finished its share (picklable
-    ``fn``), or is None if no such worker exists (all in this process, or every variant done);
-    the call returns once all submitted work has finished, and re-raises its errors."""
+    :func:`_worker_shares`; returns, per variant, its chunks' record arrays with their k values,
+    and the divergence diagnoses. ``labels``: per variant, a progress label (None: silent)."""
     labels = list(labels or [None] * len(variants))
     shares = _worker_shares([v.k_W_per_K for v in variants], variants[0].solver.jobs)
     tasks = [[(variants[v], ks, make_car, duration_s, labels[v]) for v, ks in share] for share in shares]
-    per_variant: List[list] = [[None] * sum(v == w for share in shares for w, _ in share) for v in range(len(variants))]
-    missing = [len(chunks) for chunks in per_variant]
-    merged: List[Optional[tuple]] = [None] * len(variants)
-    slots = [[] for _ in shares]  # per share: (variant, index of the chunk within its variant)
-    seen = [0] * len(variants)
-    for i, share in enumerate(shares):
-        for v, _ in share:
-            slots[i].append((v, seen[v]))
-            seen[v] += 1
-
-    def collect(i: int, results, submit) -> None:
-        for (v, n), result in zip(slots[i], results):
-            per_variant[v][n] = result
-            missing[v] -= 1
-            if missing[v] == 0:
-                merged[v] = _merge(per_variant[v])
-                if on_done is not None:
-                    on_done(v, merged[v], submit if any(missing) else None)
-
     if len(tasks) == 1:
-        collect(0, _run_chunks(tasks[0]), None)
+        done = [_run_chunks(tasks[0])]
     else:
-        extra = []
         with ProcessPoolExecutor(len(tasks), initializer=install_in_worker) as pool:
-            def submit(fn, *args):
-                extra.append(pool.submit(fn, *args))
-            futures = {pool.submit(_run_chunks, task): i for i, task in enumerate(tasks)}
-            for future in as_completed(futures):
-                collect(futures[future], future.result(), submit)
-            for future in extra:
-                future.result()
-    return merged
+            done = list(pool.map(_run_chunks, tasks))
+    per_variant: List[Tuple[list, List[str]]] = [([], []) for _ in variants]
+    for share, results in zip(shares, done):
+        for (v, _), (arrays, diagnosis, ks) in zip(share, results):
+            per_variant[v][0].append((ks, arrays))
+            if diagnosis:
+                per_variant[v][1].append(diagnosis)
+    return per_variant
 
 
-def _merge(results):
-    """(k values in ascending order, record arrays, diagnoses) from the chunks of one variant."""
-    ks, arrays, diagnoses = [], [], []
-    for rec, diag, chunk in results:
-        ks += chunk
-        arrays.append(rec)
-        if diag:
-            diagnoses.append(diag)
-    # a process whose cases all diverged stopped early: pad its record with NaN
-    longest = max(arrays, key=lambda a: len(a["t_s"]))
-    n = len(longest["t_s"])
-    merged = {name: np.concatenate([_pad(a[name], n) for a in arrays], axis=-1) for name in arrays[0] if name != "t_s"}
-    merged["t_s"] = longest["t_s"]
-    order = np.argsort(ks)                        # inf sorts last
-    merged = {name: (v[..., order] if name != "t_s" else v) for name, v in merged.items()}
-    return [ks[i] for i in order], merged, diagnoses
+def simulate_cases(scenario: Scenario, settings: Sequence[Optional[bool]], make_car: CarFactory, duration_s: float,
+                   progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
+    """Every k of ``scenario`` for each valve setting (None: as ``circuit.valves`` says), all on
+    one pool of ``solver.jobs`` processes: one labelled Dataset (:func:`cosim.series.car_dataset`;
+    cases valve setting by valve setting, k ascending within each) and the divergence diagnoses
+    (prefixed with the valve setting when there are several)."""
+    named = any(s is not None for s in settings)
+    variants = [scenario if valves is None else scenario.with_valves(valves) for valves in settings]
+    show = progress is not None and not progress.quiet
+    labels = [(scenario.name + (f" valves {'on' if v.circuit.valves else 'off'}" if named else "")) if show else None
+              for v in variants]
+    datasets, diagnoses = [], []
+    for variant, (chunks, diag) in zip(variants, simulate_variants(variants, make_car, duration_s, labels)):
+        circuit = Circuit(variant.circuit.components())
+        valves = variant.circuit.valves
+        parts = [car_dataset(arrays, ks, valves, named, circuit.link_names, circuit.valve_names) for ks, arrays in chunks]
+        ds = concat_cases(parts)
+        datasets.append(ds.isel(case=np.argsort(ds["k_W_per_K"].values, kind="stable")))  # inf sorts last
+        diagnoses += [f"valves {'on' if valves else 'off'}: {d}" if named else d for d in diag]
+    return concat_cases(datasets), diagnoses
 
 
-#: a figure to draw: (path, panels, suptitle, ncols), the arguments of :func:`cosim.plots.save_panels`
-Figure = Tuple[Path, Sequence[Panel], Optional[str], int]
+def per_case(da: xr.DataArray, scale: float = 1.0, label: str = "") -> List[Curve]:
+    """One curve per case of ``da`` (time x case) against time, labelled by its k."""
+    return [Curve(da["time"].values, da.sel(case=c).values * scale, f"{label}{k_legend(float(k))}")
+            for c, k in zip(da["case"].values, da["k_W_per_K"].values)]
 
 
-def save_figures(figures: Sequence[Figure], jobs: int) -> None:
-    """Draw independent figures on up to ``jobs`` processes, the largest (most panels) first."""
-    figures = sorted(figures, key=lambda f: -len(f[1]))
-    workers = max(1, min(jobs, len(figures)))
-    if workers == 1:
-        for figure in figures:
-            _save_figure(figure)
-        return
-    with ProcessPoolExecutor(workers) as pool:
-        list(pool.map(_save_figure, figures))
+def bellow_panels(ds: xr.Dataset) -> List[Panel]:
+    """Pressure and temperature of each bellow, one curve per case of ``ds``."""
+    return ([Panel(per_case(ds["bellow_p_Pa"].sel(bellow=b), 1e-5), "time t [s]", f"p_{b} [bar abs]", f"bellow {b}")
+             for b in BELLOWS] +
+            [Panel(per_case(ds["bellow_T_K"].sel(bellow=b)), "time t [s]", f"T_{b} [K]", f"bellow {b}")
+             for b in BELLOWS])
 
 
-def _save_figure(figure: Figure) -> Path:
-    path, panels, suptitle, ncols = figure
-    return save_panels(path, panels, suptitle, ncols=ncols)
-
-
-def _pad(values: np.ndarray, n: int) -> np.ndarray:
-    if len(values) == n:
-        return values
-    pad = np.full((n - len(values),) + values.shape[1:], np.nan)
-    return np.concatenate([values, pad])
-
-
-def record_columns(rec: Dict[str, np.ndarray], j: int) -> Dict[str, np.ndarray]:
-    """Time-series columns of case ``j`` (headers carry units)."""
-    cols = {"t_s": rec["t_s"]}
-    cols.update({f"Q_{w}_N": rec["wheel_load_N"][:, i, j] for i, w in enumerate(WHEELS)})
-    for name, key, unit in (("z", "crushing_m", "m"), ("F_bellow", "bellow_force_N", "N"),
-                            ("p_bellow", "bellow_p_Pa", "Pa"), ("T_bellow", "bellow_T_K", "K")):
-        cols.update({f"{name}_{b}_{unit}": rec[key][:, i, j] for i, b in enumerate(BELLOWS)})
-    cols["roll_carbody_rad"] = rec["roll_rad"][:, j]
-    cols["air_from_supply_kg"] = rec["air_from_supply_kg"][:, j]
-    cols["air_to_atmosphere_kg"] = rec["air_to_atmosphere_kg"][:, j]
-    return cols
-
-
-def curves_per_k(t_s: np.ndarray, ks: Sequence[float], label: str = ""):
-    """per_k(values (samples, cases), scale) -> one Curve per k."""
-    def per_k(values, scale=1.0):
-        return [Curve(t_s, values[..., j] * scale, f"{label}{k_legend(k)}") for j, k in enumerate(ks)]
-    return per_k
-
-
-def bellow_panels(rec: Dict[str, np.ndarray], ks: Sequence[float]) -> List[Panel]:
-    per_k = curves_per_k(rec["t_s"], ks)
-    return ([Panel(per_k(rec["bellow_p_Pa"][:, i], 1e-5), "time t [s]", f"p_{b} [bar abs]", f"bellow {b}")
-             for i, b in enumerate(BELLOWS)] +
-            [Panel(per_k(rec["bellow_T_K"][:, i]), "time t [s]", f"T_{b} [K]", f"bellow {b}")
-             for i, b in enumerate(BELLOWS)])
+def of_setting(ds: xr.Dataset, valves: Optional[bool]) -> xr.Dataset:
+    """The cases of one valve setting (None: every case)."""
+    return ds if valves is None else ds.isel(case=np.flatnonzero(ds["valves"].values == valves))

@@ -10,6 +10,7 @@ input (the message names the file, the key path and what was expected), 130 a sw
 from __future__ import annotations
 
 import argparse
+import logging
 import signal
 import math
 import sys
@@ -86,6 +87,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = build_parser().parse_args(argv)
+    _show_warnings()
     try:
         if args.command == "compare":
             from .compare import compare_runs
@@ -109,6 +111,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"error: cannot write {exc.filename}: {exc.strerror}; the output folder is marked INCOMPLETE",
               file=sys.stderr)
         return EXIT_FAILED
+
+
+class _Stderr(logging.Handler):
+    """Log records as ``warning: ...`` lines on the current sys.stderr."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        print(f"{record.levelname.lower()}: {record.getMessage()}", file=sys.stderr, flush=True)
+
+
+def _show_warnings() -> None:
+    """Warnings about results (validity, settling) are not progress: --quiet does not hide them."""
+    log = logging.getLogger("pneumorail")
+    if not any(isinstance(h, _Stderr) for h in log.handlers):
+        log.addHandler(_Stderr())
+        log.setLevel(logging.WARNING)
+        log.propagate = False
 
 
 def _sweep(args) -> int:
@@ -190,7 +208,7 @@ def _run(args) -> int:
     from . import interrupts
     from .outdir import INCOMPLETE, OutputFolder, default_folder
     from .runner import run_scenario
-    from .scenario import CHECK_METRICS
+    from .checks import CHECK_METRICS
     from .sweep import is_sweep_file
     if is_sweep_file(args.scenario):
         raise ScenarioError(args.scenario, [], f"this is a sweep file: pneumorail sweep {args.scenario}"

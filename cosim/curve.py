@@ -2,23 +2,23 @@
 levelling and differential pressure valves disconnected and connected."""
 from __future__ import annotations
 
-import dataclasses
 import time
-from pathlib import Path
-from typing import Collection, Dict, List, Sequence
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
+import xarray as xr
 
-from pneumatics.circuit import Circuit
-from vehicle.car import BELLOWS, MetroCar
+from vehicle.car import MetroCar
+from vehicle.params import BELLOWS
 
-from .car_runs import (Figure, _save_figure, bellow_panels, curves_per_k, record_columns, save_figures,
-                        simulate_variants)
+from .car_runs import bellow_panels, of_setting, per_case, simulate_cases
+from .checks import CaseMetrics
 from .criteria import window_mean
-from .plots import Panel
-from .results import Progress, k_label, write_columns, write_rows, write_run_json
-from .runner import CaseMetrics, Outcome
-from .scenario import CurveTest, Scenario
+from .experiments import CurveTest, Scenario
+from .outcome import Outcome, Runner, largest
+from .plots import Figure, Panel
+from .results import Progress
+from .series import with_column
 
 #: components whose link flows are written to the time series
 VALVE_PREFIXES = ("lv_", "dpv_")
@@ -47,147 +47,106 @@ def track_roll_rad(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
     return -np.asarray(scenario.curve.track().cant_rad(car_centre_s_m(scenario, t_s)), dtype=float)
 
 
-def relative_roll_rad(scenario: Scenario, rec: Dict[str, np.ndarray]) -> np.ndarray:
-    """(samples, cases) carbody roll relative to the track plane at the car centre: the absolute
-    roll (``MetroCar.carbody_roll_rad``) minus the plane's roll, i.e. roll + cant. On uncanted
-    track it is the absolute roll."""
-    return rec["roll_rad"] - track_roll_rad(scenario, rec["t_s"])[:, None]
+def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
+    """Every case (k value x valve setting) of the curve entry: the labelled time series (see
+    :mod:`cosim.series`) with the track plane's roll, the carbody roll relative to it, and the
+    flows through the valves added, and the divergence diagnoses."""
+    curve = scenario.curve
+    ds, diagnoses = simulate_cases(scenario, curve.valve_settings, make_car, curve.duration_s, progress)
+    plane = track_roll_rad(scenario, ds["time"].values)
+    ds["roll_track_plane_rad"] = with_column(xr.DataArray(plane, dims="time"), "roll_track_plane_rad", "rad",
+                                             "roll of the track plane at the car centre")
+    ds["roll_rel_rad"] = with_column(ds["roll_rad"] - ds["roll_track_plane_rad"], "roll_carbody_rel_track_rad", "rad",
+                                     "carbody roll relative to the track plane")
+    if "link" in ds.dims:
+        valves = [name for name in ds["link"].values if str(name).startswith(VALVE_PREFIXES)]
+        ds["valve_flow_kg_per_s"] = with_column(ds["link_flow_kg_per_s"].sel(link=valves).rename(link="valve_link"),
+                                                "q_{}_kg_per_s", "kg/s", "mass flow through each valve, a -> b",
+                                                sparse=True)
+    return ds, diagnoses
 
 
-def with_valves(scenario: Scenario, valves: bool) -> Scenario:
-    return dataclasses.replace(scenario, circuit=dataclasses.replace(scenario.circuit, valves=valves))
-
-
-def simulate_curve(scenario: Scenario, valves: bool, progress: bool = False):
-    """Every k with the valves connected or not: (k values, record arrays, diagnoses, circuit)."""
-    return simulate_curves(scenario, [valves], progress)[0]
-
-
-def simulate_curves(scenario: Scenario, valve_settings: Sequence[bool], progress: bool = False):
-    """Every k for each of ``valve_settings``, all cases on one pool of ``solver.jobs`` processes:
-    per setting, what :func:`simulate_curve` returns."""
-    variants = [with_valves(scenario, valves) for valves in valve_settings]
-    labels = [f"{scenario.name} valves {'on' if valves else 'off'}" if progress else None for valves in valve_settings]
-    runs = simulate_variants(variants, make_car, scenario.curve.duration_s, labels)
-    return [(ks, rec, diagnoses, Circuit(variant.circuit.components()))
-            for (ks, rec, diagnoses), variant in zip(runs, variants)]
-
-
-def run_curve(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
+def run(scenario: Scenario, progress: Progress) -> Outcome:
+    """The curve entry: every case, its summary row (:func:`summary_row`) and checkable metrics."""
     t0 = time.perf_counter()
     curve = scenario.curve
     progress(f"curve entry at {curve.speed_m_per_s:g} m/s: {curve.straight_m:g} m straight, {curve.transition_m:g} m "
              f"transition, R = {curve.radius_m:g} m; {len(scenario.k_W_per_K)} k values x valves {curve.valve_settings}")
-    settings = list(curve.valve_settings)
-    variants = [with_valves(scenario, valves) for valves in settings]
-    labels = [f"{scenario.name} valves {'on' if valves else 'off'}" if not progress.quiet else None
-              for valves in settings]
-    per_setting: List[tuple] = [None] * len(settings)  # (rows, cases, diagnoses) per valve setting
-    runs_by: List[tuple] = [None] * len(settings)
-    drawn = set()  # settings whose bellow figure was drawn while the simulation went on
-
-    def finished(v: int, result, submit) -> None:
-        """A valve setting's time series and summary rows (and, while another setting still
-        runs, its bellow figure on the worker it freed)."""
-        valves = settings[v]
-        ks, rec, diag = result
-        circuit = Circuit(variants[v].circuit.components())
-        rec = {**rec, "roll_rel_rad": relative_roll_rad(scenario, rec)}
-        runs_by[v] = (ks, rec)
-        tag = "on" if valves else "off"
-        rows, cases = [], []
-        for j, k in enumerate(ks):
-            rows.append(_summary_row(valves, k, rec, j, curve, circuit.valve_names))
-            cases.append(CaseMetrics(k, valves, {m: rows[-1][m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}))
-            cols = record_columns(rec, j)
-            cols["roll_track_plane_rad"] = track_roll_rad(scenario, rec["t_s"])
-            cols["roll_carbody_rel_track_rad"] = rec["roll_rel_rad"][:, j]
-            cols.update({f"q_{name}_kg_per_s": rec["link_flow_kg_per_s"][:, i, j]
-                         for i, name in enumerate(circuit.link_names) if name.startswith(VALVE_PREFIXES)})
-            write_columns(out / "timeseries" / f"curve_valves={tag}_k={k_label(k)}.csv", cols)
-        per_setting[v] = (rows, cases, [f"valves {tag}: {d}" for d in diag])
-        if submit is not None:
-            submit(_save_figure, _bellow_figure(out, valves, ks, rec))
-            drawn.add(valves)
-
-    simulate_variants(variants, make_car, curve.duration_s, labels, on_done=finished)
-    rows = [r for rows_v, _, _ in per_setting for r in rows_v]
-    cases = [c for _, cases_v, _ in per_setting for c in cases_v]
-    diagnoses = [d for _, _, diag_v in per_setting for d in diag_v]
-    runs = {valves: run for valves, run in zip(settings, runs_by)}
-    write_rows(out / "summary.csv", rows)
-    _plots(out, runs, scenario.solver.jobs, skip=drawn)
-    diverged = "; ".join(diagnoses) or None
-    metrics = {m: _largest(r[m] for r in rows) for m in ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg",
-                                                         "air_exhausted_kg")} if rows else {}
-    write_run_json(out, scenario, time.perf_counter() - t0, {"diverged": diverged, "metrics": metrics,
-                                                             "window_s": curve.window})
+    ds, diagnoses = simulate(scenario, progress)
+    rows, cases = [], []
+    for j in range(ds.sizes["case"]):
+        case = ds.isel(case=j)
+        row = summary_row(case, curve)
+        rows.append(row)
+        cases.append(CaseMetrics(row["k_W_per_K"], row["valves"],
+                                 {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}))
+    metrics = {m: largest(r[m] for r in rows) for m in ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg",
+                                                        "air_exhausted_kg")} if rows else {}
     shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg")
-    return Outcome(scenario, [{c: r[c] for c in shown} for r in rows], metrics, diverged, cases)
+    return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, [], {"window_s": curve.window},
+                   time.perf_counter() - t0)
 
 
-def _largest(values) -> float:
-    """The largest value; NaN if any is NaN (a diverged case)."""
-    values = list(values)
-    return float("nan") if any(v != v for v in values) else max(values)
-
-
-def _summary_row(valves: bool, k: float, rec: Dict[str, np.ndarray], j: int, curve: CurveTest,
-                 valve_names=()) -> Dict[str, object]:
-    """Roll relative to the track plane (largest |roll| over the run, and its mean over the final
-    window: the steady roll in the arc, not wherever the ~1 Hz sway is at the last sample), air
-    exchanged (cumulative: its last sample), bellow crushing (final-window means), and per
-    levelling valve the air through its supply and exhaust sides and the fraction of the run each
-    side was open."""
-    t = rec["t_s"]
-    roll = rec["roll_rel_rad"][:, j]
-    row = {"valves": valves, "k_W_per_K": k, "roll_max_rad": float(np.abs(roll).max()),
+def summary_row(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
+    """The summary of one case (``case``: the Dataset of :func:`simulate` at one case): roll
+    relative to the track plane (largest |roll| over the run, and its mean over the final window:
+    the steady roll in the arc, not wherever the ~1 Hz sway is at the last sample), air exchanged
+    (cumulative: its last sample), bellow crushing (final-window means), and per levelling valve
+    the air through its supply and exhaust sides and the fraction of the run each side was open."""
+    t = case["time"].values
+    roll = case["roll_rel_rad"].values
+    row = {"valves": bool(case["valves"]), "k_W_per_K": float(case["k_W_per_K"]),
+           "roll_max_rad": float(np.abs(roll).max()),
            "roll_mean_end_rad": float(window_mean(t, roll, curve.window)),
-           "air_injected_kg": float(rec["air_from_supply_kg"][-1, j]),
-           "air_exhausted_kg": float(rec["air_to_atmosphere_kg"][-1, j]) + 0.0}  # no "-0"
-    z = window_mean(t, rec["crushing_m"][:, :, j], curve.window)
+           "air_injected_kg": float(case["air_from_supply_kg"].values[-1]),
+           "air_exhausted_kg": float(case["air_to_atmosphere_kg"].values[-1]) + 0.0}  # no "-0"
+    z = window_mean(t, case["crushing_m"].transpose("time", "bellow").values, curve.window)
     row.update({f"z_mean_end_{b}_m": float(z[i]) for i, b in enumerate(BELLOWS)})
     duration = float(t[-1] - t[0])
-    for i, v in enumerate(valve_names):
-        row[f"{v}_supply_air_kg"] = float(rec["valve_supply_air_kg"][-1, i, j])
-        row[f"{v}_exhaust_air_kg"] = float(rec["valve_exhaust_air_kg"][-1, i, j])
-        row[f"{v}_supply_open_fraction"] = float(rec["valve_supply_open_s"][-1, i, j]) / duration
-        row[f"{v}_exhaust_open_fraction"] = float(rec["valve_exhaust_open_s"][-1, i, j]) / duration
-    row["T_bellow_min_K"] = float(rec["bellow_T_K"][:, :, j].min())
-    row["T_bellow_max_K"] = float(rec["bellow_T_K"][:, :, j].max())
+    if "valve" in case.dims:
+        for v in case["valve"].values:
+            if np.isnan(case["valve_supply_air_kg"].sel(valve=v).values[-1]):
+                continue                             # a valve of another setting's circuit
+            at_end = {name: float(case[name].sel(valve=v).values[-1]) for name in
+                      ("valve_supply_air_kg", "valve_exhaust_air_kg", "valve_supply_open_s", "valve_exhaust_open_s")}
+            row[f"{v}_supply_air_kg"] = at_end["valve_supply_air_kg"]
+            row[f"{v}_exhaust_air_kg"] = at_end["valve_exhaust_air_kg"]
+            row[f"{v}_supply_open_fraction"] = at_end["valve_supply_open_s"] / duration
+            row[f"{v}_exhaust_open_fraction"] = at_end["valve_exhaust_open_s"] / duration
+    T = case["bellow_T_K"].values
+    row["T_bellow_min_K"], row["T_bellow_max_K"] = float(T.min()), float(T.max())
     # closes to the integrator's round-off: air in the chambers changes only by what crosses the boundary
-    row["mass_balance_error_kg"] = float(rec["total_mass_kg"][-1, j] - rec["total_mass_kg"][0, j]
-                                         - rec["air_from_supply_kg"][-1, j] + rec["air_to_atmosphere_kg"][-1, j])
+    m = case["total_mass_kg"].values
+    row["mass_balance_error_kg"] = float(m[-1] - m[0] - case["air_from_supply_kg"].values[-1]
+                                         + case["air_to_atmosphere_kg"].values[-1])
     return row
 
 
-def _bellow_figure(out: Path, valves: bool, ks, rec) -> Figure:
-    """The bellow crushing, pressure and temperature figure of one valve setting."""
-    tag = "on" if valves else "off"
-    per_k = curves_per_k(rec["t_s"], ks)
-    heights = [Panel(per_k(rec["crushing_m"][:, i], 1e3), "time t [s]", f"crushing z_{b} [mm]", f"bellow {b}")
-               for i, b in enumerate(BELLOWS)]
-    return (out / f"bellows_valves={tag}.png", heights + bellow_panels(rec, ks),
-            f"Bellow crushing (+ compression), pressure and temperature, valves {tag}", 2)
-
-
-def _plots(out: Path, runs, jobs: int = 1, skip: Collection[bool] = ()) -> None:
-    """The curve's figures, drawn on up to ``jobs`` processes (``skip``: valve settings whose
-    bellow figure is drawn already)."""
-    panels: List[Panel] = []
-    for valves, (ks, rec) in runs.items():
-        per_k = curves_per_k(rec["t_s"], ks)
-        panels.append(Panel(per_k(rec["roll_rel_rad"], 1e3), "time t [s]", "carbody roll to the track plane [mrad]",
-                            f"valves {'connected' if valves else 'disconnected'}"))
-    figures = [(out / "fig9_roll.png", panels, "Carbody roll entering a curve (paper Fig. 9)", len(panels))]
-    for valves, (ks, rec) in runs.items():
-        per_k = curves_per_k(rec["t_s"], ks)
-        if valves not in skip:
-            figures.append(_bellow_figure(out, valves, ks, rec))
+def figures(outcome: Outcome) -> List[Figure]:
+    """Carbody roll (paper Fig. 9), per valve setting the bellows, and the air consumption."""
+    if not outcome.rows:
+        return []
+    ds = outcome.series["curve"]
+    settings = outcome.scenario.curve.valve_settings
+    roll = [Panel(per_case(of_setting(ds, v)["roll_rel_rad"], 1e3), "time t [s]",
+                  "carbody roll to the track plane [mrad]", f"valves {'connected' if v else 'disconnected'}")
+            for v in settings]
+    out = [Figure("fig9_roll.png", roll, "Carbody roll entering a curve (paper Fig. 9)", len(roll))]
+    for valves in settings:
+        sub = of_setting(ds, valves)
+        tag = "on" if valves else "off"
+        heights = [Panel(per_case(sub["crushing_m"].sel(bellow=b), 1e3), "time t [s]", f"crushing z_{b} [mm]",
+                         f"bellow {b}") for b in BELLOWS]
+        out.append(Figure(f"bellows_valves={tag}.png", heights + bellow_panels(sub),
+                          f"Bellow crushing (+ compression), pressure and temperature, valves {tag}", 2))
         if valves:
-            figures.append((out / "air_consumption.png",
-                            [Panel(per_k(rec["air_from_supply_kg"], 1e3), "time t [s]", "air injected from the supply [g]"),
-                             Panel(per_k(rec["air_to_atmosphere_kg"], 1e3), "time t [s]",
-                                   "air exhausted to the atmosphere [g]")],
-                            "Air consumption of the levelling valves (paper Table 4)", 2))
-    save_figures(figures, jobs)
+            out.append(Figure("air_consumption.png",
+                              [Panel(per_case(sub["air_from_supply_kg"], 1e3), "time t [s]",
+                                     "air injected from the supply [g]"),
+                               Panel(per_case(sub["air_to_atmosphere_kg"], 1e3), "time t [s]",
+                                     "air exhausted to the atmosphere [g]")],
+                              "Air consumption of the levelling valves (paper Table 4)", 2))
+    return out
+
+
+RUNNERS = {"curve_entry": Runner(run, figures)}

@@ -18,7 +18,7 @@ from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve, SafetyValve
 from vehicle.params import VehicleParams
 
-from .scenario import (CurveTest, QuasiStaticTest, RampTest, SineTest, SolverSettings, StiffnessTest, TwistTest,
+from .experiments import (CurveTest, QuasiStaticTest, RampTest, SineTest, SolverSettings, StiffnessTest, TwistTest,
                        VerifySettings)
 from .schema import _type_name
 

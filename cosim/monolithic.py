@@ -80,7 +80,7 @@ from exudyn.itemInterface import NodeGenericODE1, ObjectGenericODE1
 from .car_runs import build_cosimulation
 from .criteria import static_wheel_loads, wheel_unloading, window_mean
 from .master import Record
-from .scenario import Scenario
+from .experiments import Scenario
 
 _OUT = exu.OutputVariableType
 
@@ -328,7 +328,7 @@ class MonolithicCar:
 def run_monolithic(scenario: Scenario, k: float, duration_s: float, step_s: float,
                    output_interval_s: Optional[float] = None, **options) -> MonolithicRecord:
     """The car of ``scenario`` (twist or curve_entry; for the curve with the valves connected pass
-    ``cosim.curve.with_valves(scenario, True)``) and its circuit for one ``k``, integrated
+    ``scenario.with_valves(True)``) and its circuit for one ``k``, integrated
     monolithically with the fixed step ``step_s`` for ``duration_s``: the co-simulation's record
     (one case; ``record.arrays()`` as ``CoSimulation.run`` gives it), with ``record.monolithic``
     the :class:`MonolithicCar` (statistics, wall time). ``output_interval_s``: default the
@@ -355,9 +355,9 @@ def curve_headlines(scenario: Scenario, rec: Dict[str, np.ndarray], j: int = 0,
                     window_s: Optional[float] = None) -> Dict[str, float]:
     """Curve headlines of case ``j``: largest |roll| relative to the track plane, its mean over the
     final window (``window_s``, default the scenario's), air injected and exhausted [kg]."""
-    from .curve import relative_roll_rad
+    from .curve import track_roll_rad
     t = np.asarray(rec["t_s"])
-    roll = relative_roll_rad(scenario, rec)[:, j]
+    roll = rec["roll_rad"][:, j] - track_roll_rad(scenario, t)
     w = window_s if window_s is not None else scenario.curve.window
     return {"roll_max_rad": float(np.abs(roll).max()),
             "roll_mean_end_rad": float(window_mean(t, roll, min(w, t[-1] - t[0]))),

@@ -33,6 +33,20 @@ class Panel:
     hlines: List[Tuple[float, str]] = field(default_factory=list)
 
 
+@dataclass
+class Figure:
+    """A figure to draw: ``name`` (the PNG's file name), its panels, a title and the number of
+    panel columns."""
+
+    name: str
+    panels: List[Panel]
+    title: Optional[str] = None
+    ncols: int = 1
+
+    def save(self, folder: Path) -> Path:
+        return save_panels(Path(folder) / self.name, self.panels, self.title, ncols=self.ncols)
+
+
 def save_panels(path: Path, panels: Sequence[Panel], suptitle: Optional[str] = None, ncols: int = 1) -> Path:
     nrows = -(-len(panels) // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(7.5 * ncols, 3.6 * nrows), squeeze=False)

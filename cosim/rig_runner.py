@@ -1,105 +1,129 @@
-"""Run the bellow-tank virtual test rig scenarios (paper §3): outputs CSV, PNG and run.json."""
+"""The bellow-tank virtual test rig scenarios (paper §3): ramp, sine, dynamic stiffness and Table 2,
+each a run returning an :class:`~cosim.outcome.Outcome` and the figures drawn from it."""
 from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
 from typing import Dict, List
 
 import numpy as np
+import xarray as xr
 
 from pneumatics.chamber import quasi_static_stiffness_N_per_m
 from pneumatics.gas import AIR
 from pneumatics.rig import (dynamic_stiffness_sweep, quasi_static_stiffness_table, ramp_motion, run_time_series,
                             sine_motion)
 
-from .plots import Curve, Panel, k_legend, save_panels
-from .results import Progress, k_label, write_columns, write_rows, write_run_json
-from .scenario import RampTest, Scenario, SineTest
+from .experiments import RampTest, Scenario, SineTest
+from .outcome import Outcome, Runner, warn
+from .plots import Curve, Figure, Panel, k_legend
+from .results import Progress, k_label
 
 #: Mach number of the pipe flow above which eq. (5)'s incompressible law is outside its validity.
 MACH_WARNING = 0.3
 
 
-def run_rig(scenario: Scenario, out_dir: Path, progress: Progress):
-    """Run a rig scenario into ``out_dir``; returns (summary rows, divergence diagnoses)."""
+def run(scenario: Scenario, progress: Progress) -> Outcome:
+    """A rig scenario: its summary rows, a time series per run, diagnoses and validity warnings."""
     t0 = time.perf_counter()
-    runner = {"rig_ramp": _ramp, "rig_sine": _sine, "rig_stiffness": _stiffness, "rig_table2": _table2}[scenario.kind]
     diagnoses: List[str] = []
-    rows = runner(scenario, out_dir, progress, diagnoses)
-    write_rows(out_dir / "summary.csv", rows)
-    write_run_json(out_dir, scenario, time.perf_counter() - t0, {"diverged": "; ".join(diagnoses) or None})
-    return rows, diagnoses
+    found: List[str] = []
+    stage = {"rig_ramp": _ramp, "rig_sine": _sine, "rig_stiffness": _stiffness, "rig_table2": _table2}[scenario.kind]
+    rows, series = stage(scenario, progress, diagnoses, found)
+    return Outcome(scenario, rows, series=series, diagnoses=diagnoses, warnings=found,
+                   wall_s=time.perf_counter() - t0)
 
 
-def _keep_diagnosis(ts, diagnoses: List[str], progress: Progress) -> None:
+def _keep_diagnosis(ts, diagnoses: List[str], found: List[str], progress: Progress) -> None:
     """Report an early stop, and a pipe flow beyond the incompressible law's validity."""
     if ts.pipe_mach.size and ts.pipe_mach.max() > MACH_WARNING:
         i = int(np.argmax(ts.pipe_mach > MACH_WARNING))
-        progress(f"warning: the pipe flow exceeds Mach {MACH_WARNING} from t = {ts.t_s[i]:.3g} s (up to Mach "
-                 f"{ts.pipe_mach.max():.2f}): the incompressible pipe law (eq. 5) is outside its validity there")
+        warn(found, f"the pipe flow exceeds Mach {MACH_WARNING} from t = {ts.t_s[i]:.3g} s (up to Mach "
+                    f"{ts.pipe_mach.max():.2f}): the incompressible pipe law (eq. 5) is outside its validity there")
     if ts.diagnosis:
         diagnoses.append(ts.diagnosis)
         progress(f"stopped early, results kept up to there: {ts.diagnosis}")
 
 
-def _series_columns(ts) -> Dict[str, np.ndarray]:
-    cols = {"t_s": ts.t_s, "z_m": ts.z_m, "F_bellow_N": ts.force_N, "pipe_mach": ts.pipe_mach}
-    for i, name in enumerate(ts.chamber_names):
-        cols[f"p_{name}_Pa"] = ts.p_Pa[i]
-        cols[f"T_{name}_K"] = ts.T_K[i]
-    return cols
+def rig_dataset(ts, **attrs) -> xr.Dataset:
+    """A rig run's time series (:class:`pneumatics.rig.TimeSeries`) as a labelled Dataset, time x
+    chamber; ``attrs`` (k, configuration ...) describe the run."""
+    def var(values, units, long_name, column):
+        return values, {"units": units, "long_name": long_name, "column": column}
+    data = {"z_m": ("time", *var(ts.z_m, "m", "bellow crushing z (+ compression)", "z_m")),
+            "F_bellow_N": ("time", *var(ts.force_N, "N", "bellow force F", "F_bellow_N")),
+            "pipe_mach": ("time", *var(ts.pipe_mach, "1", "Mach number of the pipe flow", "pipe_mach")),
+            "p_Pa": (("chamber", "time"), *var(np.asarray(ts.p_Pa), "Pa", "pressure (absolute)", "p_{}_Pa")),
+            "T_K": (("chamber", "time"), *var(np.asarray(ts.T_K), "K", "temperature", "T_{}_K"))}
+    ds = xr.Dataset(data, coords={"time": ("time", ts.t_s, {"units": "s"}), "chamber": list(ts.chamber_names)},
+                    attrs=attrs)
+    for name in ("p_Pa", "T_K"):
+        ds[name] = ds[name].transpose("time", "chamber")
+    return ds
 
 
-def _ramp(scenario: Scenario, out: Path, progress: Progress, diagnoses: List[str]):
+def _ramp(scenario: Scenario, progress: Progress, diagnoses: List[str], found: List[str]):
     test: RampTest = scenario.test
     rig = scenario.rig
-    rows, panels = [], []
+    rows, series = [], {}
     for config in test.configurations:
         comps = rig.components(with_tank=config == "bellow_tank" and rig.tank is not None)
-        curves, temps = [], []
         for k in scenario.k_W_per_K:
             progress(f"ramp {config}, k = {k_label(k)} W/K")
             ts = run_time_series(comps, k, ramp_motion(test.amplitude_m, test.ramp_s), test.duration_s, test.samples,
                                  max_step_s=test.ramp_s / 50, p0_Pa=rig.initial_pressures(comps))
-            _keep_diagnosis(ts, diagnoses, progress)
-            write_columns(out / "timeseries" / f"ramp_{config}_k={k_label(k)}.csv", _series_columns(ts))
-            curves.append(Curve(ts.t_s, ts.force_N / 1e3, k_legend(k)))
-            temps.append(Curve(ts.t_s, ts.T_K[0], k_legend(k)))
+            _keep_diagnosis(ts, diagnoses, found, progress)
+            series[f"ramp_{config}_k={k_label(k)}"] = rig_dataset(ts, k_W_per_K=k, configuration=config)
             rows.append({"configuration": config, "k_W_per_K": k, "F_initial_N": ts.force_N[0],
                          "F_peak_N": ts.force_N.max(), "F_final_N": ts.force_N[-1],
                          "T_bellow_max_K": ts.T_K[0].max(), "T_bellow_final_K": ts.T_K[0][-1],
                          "pipe_mach_max": ts.pipe_mach.max()})
+    return rows, series
+
+
+def _ramp_figures(outcome: Outcome) -> List[Figure]:
+    test = outcome.scenario.test
+    panels = []
+    for config in test.configurations:
+        runs = [ds for ds in outcome.series.values() if ds.attrs["configuration"] == config]
         title = "bellow + tank" if config == "bellow_tank" else "bellow alone"
-        panels.append(Panel(curves, "time t [s]", "bellow force F [kN]", f"{test.amplitude_m * 1e3:g} mm ramp in {test.ramp_s:g} s, {title}"))
-        panels.append(Panel(temps, "time t [s]", "bellow temperature T [K]", title))
-    save_panels(out / "fig3_ramp_force.png", panels, "Bellow reaction force to a compression ramp (paper Fig. 3)", ncols=2)
-    return rows
+        panels.append(Panel([Curve(ds["time"].values, ds["F_bellow_N"].values / 1e3, k_legend(ds.attrs["k_W_per_K"]))
+                             for ds in runs], "time t [s]", "bellow force F [kN]",
+                            f"{test.amplitude_m * 1e3:g} mm ramp in {test.ramp_s:g} s, {title}"))
+        panels.append(Panel([Curve(ds["time"].values, ds["T_K"].isel(chamber=0).values, k_legend(ds.attrs["k_W_per_K"]))
+                             for ds in runs], "time t [s]", "bellow temperature T [K]", title))
+    return [Figure("fig3_ramp_force.png", panels, "Bellow reaction force to a compression ramp (paper Fig. 3)", 2)]
 
 
-def _sine(scenario: Scenario, out: Path, progress: Progress, diagnoses: List[str]):
+def _sine(scenario: Scenario, progress: Progress, diagnoses: List[str], found: List[str]):
     test: SineTest = scenario.test
     rig = scenario.rig
     comps = rig.components(with_tank=rig.tank is not None)
     period = 1.0 / test.frequency_Hz
     n = int(round(test.duration_s / period * test.samples_per_period)) + 1
-    rows, curves, pcurves = [], [], []
+    rows, series = [], {}
     for k in scenario.k_W_per_K:
         progress(f"sine {test.frequency_Hz:g} Hz, {test.duration_s:g} s, k = {k_label(k)} W/K")
         ts = run_time_series(comps, k, sine_motion(test.amplitude_m, test.frequency_Hz), test.duration_s, n,
                              max_step_s=period / 20, p0_Pa=rig.initial_pressures(comps))
-        _keep_diagnosis(ts, diagnoses, progress)
-        write_columns(out / "timeseries" / f"sine_{test.frequency_Hz:g}Hz_k={k_label(k)}.csv", _series_columns(ts))
-        curves.append(Curve(ts.t_s, ts.T_K[0], k_legend(k)))
-        pcurves.append(Curve(ts.t_s, ts.p_Pa[0] / 1e5, k_legend(k)))
+        _keep_diagnosis(ts, diagnoses, found, progress)
+        series[f"sine_{test.frequency_Hz:g}Hz_k={k_label(k)}"] = rig_dataset(ts, k_W_per_K=k)
         rows.append({"k_W_per_K": k, "frequency_Hz": test.frequency_Hz, **_sine_summary(ts, test),
                      "pipe_mach_max": ts.pipe_mach.max()})
-    save_panels(out / "fig5_bellow_temperature.png",
-                [Panel(curves, "time t [s]", "bellow temperature T [K]",
-                       f"{test.amplitude_m * 1e3:g} mm sine at {test.frequency_Hz:g} Hz"),
-                 Panel(pcurves, "time t [s]", "bellow pressure p [bar abs]")],
-                "Bellow temperature history (paper Fig. 5)")
-    return rows
+    return rows, series
+
+
+def _sine_figures(outcome: Outcome) -> List[Figure]:
+    test = outcome.scenario.test
+    runs = list(outcome.series.values())
+    def curves(name, scale=1.0):
+        return [Curve(ds["time"].values, ds[name].isel(chamber=0).values * scale, k_legend(ds.attrs["k_W_per_K"]))
+                for ds in runs]
+    return [Figure("fig5_bellow_temperature.png",
+                   [Panel(curves("T_K"), "time t [s]", "bellow temperature T [K]",
+                          f"{test.amplitude_m * 1e3:g} mm sine at {test.frequency_Hz:g} Hz"),
+                    Panel(curves("p_Pa", 1e-5), "time t [s]", "bellow pressure p [bar abs]")],
+                   "Bellow temperature history (paper Fig. 5)")]
 
 
 def _sine_summary(ts, test: SineTest) -> Dict[str, object]:
@@ -119,7 +143,7 @@ def _sine_summary(ts, test: SineTest) -> Dict[str, object]:
             "p_bellow_mean_last_period_Pa": ts.p_Pa[0][-spp:].mean()}
 
 
-def _stiffness(scenario: Scenario, out: Path, progress: Progress, diagnoses: List[str]):
+def _stiffness(scenario: Scenario, progress: Progress, diagnoses: List[str], found: List[str]):
     test = scenario.test
     rig = scenario.rig
     comps = rig.components(with_tank=rig.tank is not None)
@@ -137,43 +161,53 @@ def _stiffness(scenario: Scenario, out: Path, progress: Progress, diagnoses: Lis
                      "stabilised": p.stabilised, "periodicity_residual": p.residual,
                      "floquet_max": p.floquet_max, "cycles_to_settle": p.cycles_to_settle,
                      "pipe_mach_max": p.pipe_mach_max if p.stabilised else math.nan})
+    series = {}
     loops = [p for p in points if p.stabilised]
     if loops:
-        write_columns(out / "timeseries" / "stiffness_loops.csv", {
-            "k_W_per_K": np.concatenate([np.full(p.loop_phase.size, p.k_W_per_K) for p in loops]),
-            "frequency_Hz": np.concatenate([np.full(p.loop_phase.size, p.frequency_Hz) for p in loops]),
-            "phase": np.concatenate([p.loop_phase for p in loops]),
-            "z_m": np.concatenate([test.amplitude_m * np.sin(2 * np.pi * p.loop_phase) for p in loops]),
-            "F_bellow_N": np.concatenate([p.loop_F_N for p in loops]),
-            "T_bellow_K": np.concatenate([p.loop_T_K for p in loops])})
+        def column(values, units, long_name, name):
+            return "point", np.concatenate(values), {"units": units, "long_name": long_name, "column": name}
+        series["stiffness_loops"] = xr.Dataset({
+            "k_W_per_K": column([np.full(p.loop_phase.size, p.k_W_per_K) for p in loops], "W/K",
+                                "heat transfer coefficient k", "k_W_per_K"),
+            "frequency_Hz": column([np.full(p.loop_phase.size, p.frequency_Hz) for p in loops], "Hz", "frequency f",
+                                   "frequency_Hz"),
+            "phase": column([p.loop_phase for p in loops], "1", "phase of the period (0 ... 1)", "phase"),
+            "z_m": column([test.amplitude_m * np.sin(2 * np.pi * p.loop_phase) for p in loops], "m", "crushing z", "z_m"),
+            "F_bellow_N": column([p.loop_F_N for p in loops], "N", "bellow force F", "F_bellow_N"),
+            "T_bellow_K": column([p.loop_T_K for p in loops], "K", "bellow temperature T", "T_bellow_K")})
     fast = [p for p in points if p.stabilised and p.pipe_mach_max > MACH_WARNING]
     if fast:
         worst = max(fast, key=lambda p: p.pipe_mach_max)
-        progress(f"warning: in {len(fast)} cases the pipe velocity exceeds Mach {MACH_WARNING} "
-                 f"(up to Mach {worst.pipe_mach_max:.2f} at {worst.frequency_Hz:g} Hz, k = {k_label(worst.k_W_per_K)}): "
-                 "the incompressible pipe law (eq. 5) is outside its validity there")
+        warn(found, f"in {len(fast)} cases the pipe velocity exceeds Mach {MACH_WARNING} "
+                    f"(up to Mach {worst.pipe_mach_max:.2f} at {worst.frequency_Hz:g} Hz, k = {k_label(worst.k_W_per_K)}): "
+                    "the incompressible pipe law (eq. 5) is outside its validity there")
     unstable = [p for p in points if not p.stabilised]
     if unstable:
-        progress(f"{len(unstable)} of {len(points)} cases did not reach a stable periodic state (stabilised = False "
-                 "in summary.csv, no K_dyn reported)")
+        warn(found, f"{len(unstable)} of {len(points)} cases did not reach a stable periodic state (stabilised = False "
+                    "in summary.csv, no K_dyn reported)")
+    progress(f"sweep of {len(points)} cases took {wall:.1f} s")
+    return rows, series
+
+
+def _stiffness_figures(outcome: Outcome) -> List[Figure]:
+    scenario, rows = outcome.scenario, outcome.rows
+    test, rig = scenario.test, scenario.rig
     curves = []
     for k in scenario.k_W_per_K:
-        pts = [p for p in points if p.k_W_per_K == k and p.stabilised]
+        pts = [r for r in rows if r["k_W_per_K"] == k and r["stabilised"]]
         if pts:
-            curves.append(Curve([p.frequency_Hz for p in pts], [p.K_dyn_N_per_m / 1e3 for p in pts], k_legend(k), "o-"))
+            curves.append(Curve([r["frequency_Hz"] for r in pts], [r["K_dyn_N_per_m"] / 1e3 for r in pts], k_legend(k), "o-"))
     b, t = rig.bellow, rig.tank
     V_all = b.V0_m3 + (t.V_m3 if t else 0.0)
     ref = [(quasi_static_stiffness_N_per_m(b, rig.p0_Pa, V_all, n) / 1e3, f"{name}, V = {V_all * 1e3:g} dm3")
            for n, name in ((AIR.gamma, "adiabatic"), (1.0, "isothermal"))]
     ref += [(quasi_static_stiffness_N_per_m(b, rig.p0_Pa, b.V0_m3, n) / 1e3, f"{name}, bellow alone")
             for n, name in ((AIR.gamma, "adiabatic"), (1.0, "isothermal"))] if t else []
-    save_panels(out / "fig6_dynamic_stiffness.png",
-                [Panel(curves, "frequency f [Hz]", "dynamic stiffness K_dyn [kN/m]",
-                       f"{test.amplitude_m * 1e3:g} mm amplitude, periodic steady state (unstabilised cases omitted)",
-                       logx=True, logy=_spans_decades(curves), hlines=ref)],
-                "Dynamic stiffness of the bellow-tank subsystem (paper Fig. 6)")
-    progress(f"sweep of {len(points)} cases took {wall:.1f} s")
-    return rows
+    return [Figure("fig6_dynamic_stiffness.png",
+                   [Panel(curves, "frequency f [Hz]", "dynamic stiffness K_dyn [kN/m]",
+                          f"{test.amplitude_m * 1e3:g} mm amplitude, periodic steady state (unstabilised cases omitted)",
+                          logx=True, logy=_spans_decades(curves), hlines=ref)],
+                   "Dynamic stiffness of the bellow-tank subsystem (paper Fig. 6)")]
 
 
 def _spans_decades(curves) -> bool:
@@ -182,10 +216,18 @@ def _spans_decades(curves) -> bool:
     return bool(values) and max(values) > 10 * min(values)
 
 
-def _table2(scenario: Scenario, out: Path, progress: Progress, diagnoses: List[str]):
+def _no_figures(outcome: Outcome) -> List[Figure]:
+    return []
+
+
+def _table2(scenario: Scenario, progress: Progress, diagnoses: List[str], found: List[str]):
     rig, test = scenario.rig, scenario.test
     progress("quasi-static stiffness (Table 2)")
     table = quasi_static_stiffness_table(rig.bellow, rig.tank, rig.pipe, rig.p0_Pa, AIR.gamma, test.amplitude_m, test.ramp_s)
     return [{"configuration": r.configuration, "regime": r.regime, "analytic_N_per_m": r.analytic_N_per_m,
              "simulated_N_per_m": r.simulated_N_per_m,
-             "relative_difference": r.simulated_N_per_m / r.analytic_N_per_m - 1.0} for r in table]
+             "relative_difference": r.simulated_N_per_m / r.analytic_N_per_m - 1.0} for r in table], {}
+
+
+RUNNERS = {"rig_ramp": Runner(run, _ramp_figures), "rig_sine": Runner(run, _sine_figures),
+           "rig_stiffness": Runner(run, _stiffness_figures), "rig_table2": Runner(run, _no_figures)}

@@ -17,7 +17,7 @@ finished (status ``diverged``, the diagnosis kept); a case that raises or whose 
 
 Outputs: ``sweep.csv`` (one row per case and summary row, the grid values as columns, then every
 summary metric, ``status`` and ``diagnosis``), ``sweep.json`` (the definition and each case's
-key and status), ``sweep.nc`` (xarray, when installed) and plots of the headline metrics.
+key and status), ``sweep.nc`` (xarray) and plots of the headline metrics.
 """
 from __future__ import annotations
 
@@ -259,7 +259,8 @@ class Prepared:
 def prepare(spec: SweepSpec, check: bool = False) -> Prepared:
     """Expand and validate every case (``load_scenario``) before anything runs; bad input is a
     :class:`ScenarioError` naming the file and the key path."""
-    from .scenario import CHECK_METRICS, load_scenario
+    from .checks import CHECK_METRICS
+    from .scenario import load_scenario
     if not spec.grid and not spec.zip:
         raise ScenarioError(spec.source or spec.scenario_file, [spec.where[0]],
                             "nothing to sweep: give at least one grid key (KEY=V1,V2,...)")
@@ -359,7 +360,7 @@ def _metrics_json(case) -> Dict[str, Any]:
 
 
 def _metrics_from_json(items):
-    from .runner import CaseMetrics
+    from .checks import CaseMetrics
     return [CaseMetrics(float(d["k"]), bool(d["valves"]), {m: float(v) for m, v in d["values"].items()},
                         {m: {w: float(v) for w, v in per.items()} for m, per in d["wheels"].items()})
             for d in items]
@@ -393,7 +394,7 @@ class SweepOutcome:
     def check_failures(self) -> List[Tuple[Case, List[str]]]:
         """Cases where a limit of the base scenario's ``checks:`` is violated, or that did not finish
         (a diverged case fails every check; failed or pending cases cannot be checked)."""
-        from .runner import Outcome
+        from .outcome import Outcome
         bad = []
         for case in self.prepared.cases:
             record = self.results.get(case.key)
@@ -597,11 +598,7 @@ def _numeric_column(rows, col) -> bool:
 
 def write_netcdf(outcome: SweepOutcome) -> List[str]:
     """sweep.nc: every numeric summary metric over (grid keys..., first zip key, k, valves)."""
-    try:
-        import xarray  # noqa: F401
-        import pandas as pd
-    except ImportError:
-        return ["sweep.nc skipped: xarray is not installed (pip install -e \".[dask]\")"]
+    import pandas as pd                     # comes with xarray
     rows = table_rows(outcome)
     if not rows:
         return []

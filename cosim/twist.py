@@ -4,20 +4,21 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
+import xarray as xr
 
-from vehicle.car import WHEELS, MetroCar
+from vehicle.car import MetroCar
+from vehicle.params import WHEELS
 
+from .car_runs import bellow_panels, of_setting, per_case, simulate_cases
+from .checks import CaseMetrics
 from .criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading, window_drift, window_mean
-from .car_runs import Figure, bellow_panels, curves_per_k, record_columns, save_figures, simulate_variants
-from .curve import with_valves
-from .plots import Panel
-from .results import Progress, k_label, write_columns, write_rows, write_run_json
-from .runner import CaseMetrics, Outcome
-from .scenario import Scenario, TwistTest
+from .experiments import Scenario, TwistTest
+from .outcome import Outcome, Runner, largest, warn
+from .plots import Figure, Panel
+from .results import Progress, k_label
 
 #: wheels every twist plot shows (paper Fig. 8); the worst wheels of the run are added
 PLOT_WHEELS = ("1L", "1R", "4L", "4R")
@@ -86,20 +87,17 @@ def valve_settings(scenario: Scenario) -> Sequence[Optional[bool]]:
     return scenario.twist.valve_settings or (None,)
 
 
-def simulate_twist(scenario: Scenario, progress: Optional[Progress] = None, valves: Optional[bool] = None):
-    """Every k of the twist scenario: (k values, record arrays, diagnoses). ``valves``: connect
-    (True) or isolate (False) the levelling valves; None: as ``circuit.valves`` says."""
-    return simulate_twists(scenario, [valves], progress)[0]
-
-
-def simulate_twists(scenario: Scenario, settings: Sequence[Optional[bool]], progress: Optional[Progress] = None):
-    """:func:`simulate_twist` for each of the valve ``settings``, all cases on one pool of
-    ``solver.jobs`` processes."""
-    variants = [scenario if valves is None else with_valves(scenario, valves) for valves in settings]
-    show = progress is not None and not progress.quiet
-    labels = [(scenario.name if valves is None else f"{scenario.name} valves {'on' if valves else 'off'}")
-              if show else None for valves in settings]
-    return simulate_variants(variants, make_car, scenario.twist.duration_s, labels)
+def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
+    """Every case (k value x valve setting) of the twist scenario: the labelled time series (see
+    :mod:`cosim.series`) with the wheel unloading ``dqq`` (ΔQ/Q0, time x wheel x case) added, and
+    the divergence diagnoses."""
+    ds, diagnoses = simulate_cases(scenario, valve_settings(scenario), make_car, scenario.twist.duration_s, progress)
+    Q = ds["wheel_load_N"].transpose("time", "wheel", "case")
+    Q0 = static_wheel_loads(Q.values[0])                                   # (8, cases)
+    ds["Q0_N"] = (("wheel", "case"), Q0, {"units": "N", "long_name": "static wheel load Q0 (wheelset mean, level track)"})
+    ds["dqq"] = (("time", "wheel", "case"), wheel_unloading(Q.values, Q0),
+                 {"units": "1", "long_name": "wheel unloading ΔQ/Q0 (positive: unloaded)", "column": "dqq_{}"})
+    return ds, diagnoses
 
 
 def twist_metrics(t_s: np.ndarray, dqq: np.ndarray, test: TwistTest, j: int) -> Dict[str, object]:
@@ -121,7 +119,9 @@ def twist_metrics(t_s: np.ndarray, dqq: np.ndarray, test: TwistTest, j: int) -> 
     return row
 
 
-def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
+def run(scenario: Scenario, progress: Progress) -> Outcome:
+    """The twist test: every case, its summary row (:func:`twist_metrics`, the end roll, the
+    bellow temperature range) and checkable metrics."""
     t0 = time.perf_counter()
     test = scenario.twist
     settings = valve_settings(scenario)
@@ -131,59 +131,37 @@ def run_twist(scenario: Scenario, out: Path, progress: Progress) -> Outcome:
     progress(f"twist {test.twist * 1e3:g} permille over {test.base_m:g} m -> rail raised {test.height_m * 1e3:.1f} mm under "
              f"{', '.join(test.raised_wheels)}{bogie}; {len(scenario.k_W_per_K)} k values{valves_text}, "
              f"{test.duration_s:g} s simulated")
+    ds, diagnoses = simulate(scenario, progress)
+    t = ds["time"].values
+    dqq = ds["dqq"].transpose("time", "wheel", "case").values
     rows: List[Dict[str, object]] = []
     cases: List[CaseMetrics] = []
-    runs = {}
-    diagnoses: List[str] = []
-    Q0_N = None
-    for setting, (ks, rec, diag) in zip(settings, simulate_twists(scenario, settings, progress)):
-        valves = scenario.circuit.valves if setting is None else setting
-        tag = "" if setting is None else f"valves={'on' if valves else 'off'}_"
-        diagnoses += diag if setting is None else [f"valves {'on' if valves else 'off'}: {d}" for d in diag]
-        Q = rec["wheel_load_N"]                       # (samples, 8, cases)
-        Q0 = static_wheel_loads(Q[0])                 # (8, cases)
-        Q0_N = Q0 if Q0_N is None else Q0_N
-        dqq = wheel_unloading(Q, Q0)                  # (samples, 8, cases)
-        t = rec["t_s"]
-        runs[setting] = (ks, rec, dqq)
-        for j, k in enumerate(ks):
-            row = {"valves": valves, "k_W_per_K": k, **twist_metrics(t, dqq, test, j)}
-            row["roll_carbody_mean_end_rad"] = float(window_mean(t, rec["roll_rad"][:, j], test.window))
-            row["T_bellow_max_K"] = float(rec["bellow_T_K"][:, :, j].max())
-            row["T_bellow_min_K"] = float(rec["bellow_T_K"][:, :, j].min())
-            rows.append(row)
-            cases.append(CaseMetrics(k, valves, wheels={m: {w: row[f"{prefix}_{w}"] for w in WHEELS} for m, prefix in
-                                                        (("dqq_max", "dqq_max"), ("dqq_qs_max", "dqq_qs"),
-                                                         ("dqq_drift", "dqq_drift"))}))
-            if not row["settled"]:
-                progress(f"{tag.rstrip('_').replace('=', ' ')} k = {k_label(k)}: not settled, the {test.window:g} s mean "
-                         f"of ΔQ/Q0 still moves by {row['dqq_drift']:.2g} from one window to the next "
-                         f"(limit {test.settle_drift:g})".lstrip())
-            write_columns(out / "timeseries" / f"twist_{tag}k={k_label(k)}.csv",
-                          {**record_columns(rec, j), **{f"dqq_{w}": dqq[:, i, j] for i, w in enumerate(WHEELS)}})
-    write_rows(out / "summary.csv", rows)
-    shown = _plot_wheels(rows)
-    save_figures([figure for setting, (ks, rec, dqq) in runs.items()
-                  for figure in _figures(out, ks, rec, dqq, test, _dqq_limit(scenario), shown, setting)],
-                 scenario.solver.jobs)
-    diverged = "; ".join(diagnoses) or None
-    metrics = {m: _largest(r[m] for r in rows) for m in ("dqq_max", "dqq_qs_max", "dqq_drift")} if rows else {}
-    write_run_json(out, scenario, time.perf_counter() - t0,
-                   {"twist_height_m": test.height_m, "twist_per_mille": test.twist * 1e3,
-                    "bogie_twist_height_m": test.bogie_height_m, "bogie_twist_per_mille": test.bogie_twist * 1e3,
-                    "rail_heights_m": {w: float(h) for w, h in zip(WHEELS, rail_heights(test)(test.duration_s))},
-                    "window_s": test.window, "settle_drift": test.settle_drift,
-                    "diverged": diverged, "metrics": metrics,
-                    "Q0_N": {w: float(Q0_N[i, 0]) for i, w in enumerate(WHEELS)} if Q0_N is not None else {}})
-    columns = ("valves", "k_W_per_K", "dqq_max", "dqq_max_wheel", "t_dqq_max_s", "dqq_qs_max", "dqq_qs_max_wheel",
-               "dqq_drift", "settled", "T_bellow_max_K")
-    return Outcome(scenario, [{c: r[c] for c in columns} for r in rows], metrics, diverged, cases)
-
-
-def _largest(values) -> float:
-    """The largest value; NaN if any is NaN (a diverged case)."""
-    values = list(values)
-    return math.nan if any(math.isnan(v) for v in values) else max(values)
+    found: List[str] = []
+    named = settings != (None,)
+    for j, (k, valves) in enumerate(zip(ds["k_W_per_K"].values, ds["valves"].values)):
+        k, valves = float(k), bool(valves)
+        row = {"valves": valves, "k_W_per_K": k, **twist_metrics(t, dqq, test, j)}
+        row["roll_carbody_mean_end_rad"] = float(window_mean(t, ds["roll_rad"].values[:, j], test.window))
+        T = ds["bellow_T_K"].isel(case=j).values
+        row["T_bellow_max_K"], row["T_bellow_min_K"] = float(T.max()), float(T.min())
+        rows.append(row)
+        cases.append(CaseMetrics(k, valves, wheels={m: {w: row[f"{prefix}_{w}"] for w in WHEELS} for m, prefix in
+                                                    (("dqq_max", "dqq_max"), ("dqq_qs_max", "dqq_qs"),
+                                                     ("dqq_drift", "dqq_drift"))}))
+        if not row["settled"]:
+            where = f"valves {'on' if valves else 'off'}, " if named else ""
+            warn(found, f"{where}k = {k_label(k)}: not settled, the {test.window:g} s mean of ΔQ/Q0 still moves by "
+                        f"{row['dqq_drift']:.2g} from one window to the next (limit {test.settle_drift:g})")
+    metrics = {m: largest(r[m] for r in rows) for m in ("dqq_max", "dqq_qs_max", "dqq_drift")} if rows else {}
+    info = {"twist_height_m": test.height_m, "twist_per_mille": test.twist * 1e3,
+            "bogie_twist_height_m": test.bogie_height_m, "bogie_twist_per_mille": test.bogie_twist * 1e3,
+            "rail_heights_m": {w: float(h) for w, h in zip(WHEELS, rail_heights(test)(test.duration_s))},
+            "window_s": test.window, "settle_drift": test.settle_drift,
+            "Q0_N": {w: float(q) for w, q in zip(WHEELS, ds["Q0_N"].values[:, 0])} if ds.sizes["case"] else {}}
+    shown = ("valves", "k_W_per_K", "dqq_max", "dqq_max_wheel", "t_dqq_max_s", "dqq_qs_max", "dqq_qs_max_wheel",
+             "dqq_drift", "settled", "T_bellow_max_K")
+    return Outcome(scenario, rows, shown, {"twist": ds}, metrics, cases, diagnoses, found, info,
+                   time.perf_counter() - t0)
 
 
 def _dqq_limit(scenario: Scenario) -> float:
@@ -192,33 +170,42 @@ def _dqq_limit(scenario: Scenario) -> float:
     return min(limits) if limits else DQQ_LIMIT
 
 
-def _plot_wheels(rows) -> List[str]:
+def plot_wheels(rows) -> List[str]:
     """Fig. 8's wheels and the worst ones of the run (largest dynamic and quasi-static ΔQ/Q0 over
     every case), in wheel order."""
     worst = set()
-    for key, prefix in (("dqq_max", "dqq_max_"), ("dqq_qs_max", "dqq_qs_")):
+    for prefix in ("dqq_max_", "dqq_qs_"):
         values = {w: max((r[prefix + w] for r in rows), key=lambda v: -math.inf if math.isnan(v) else v) for w in WHEELS}
         worst.add(max(WHEELS, key=lambda w: -math.inf if math.isnan(values[w]) else values[w]))
     return [w for w in WHEELS if w in PLOT_WHEELS or w in worst]
 
 
-def _figures(out: Path, ks, rec, dqq, test: TwistTest, limit: float, wheels: Sequence[str],
-             setting: Optional[bool]) -> List[Figure]:
-    """The figures of one valve setting (see :func:`cosim.car_runs.save_figures`)."""
-    Q = rec["wheel_load_N"]
-    per_k = curves_per_k(rec["t_s"], ks)
-    suffix = "" if setting is None else f"_valves={'on' if setting else 'off'}"
-    valves = "" if setting is None else f", valves {'connected' if setting else 'isolated'}"
+def figures(outcome: Outcome) -> List[Figure]:
+    """Per valve setting: the wheel loads (paper Fig. 8), ΔQ/Q0 with its limit, the bellows."""
+    if not outcome.rows:
+        return []
+    test, ds = outcome.scenario.twist, outcome.series["twist"]
+    wheels = plot_wheels(outcome.rows)
+    limit = _dqq_limit(outcome.scenario)
     extra = [w for w in wheels if w not in PLOT_WHEELS]
     shown = "wheelsets 1 and 4" + (f" and the worst wheel{'s' if len(extra) > 1 else ''} {', '.join(extra)}" if extra else "")
     height = f"rail raised {test.height_m * 1e3:.0f} mm" + (
         f", bogie twisted {test.bogie_height_m * 1e3:.0f} mm" if test.bogie_base_m is not None else "")
-    return [(out / f"fig8_wheel_loads{suffix}.png",
-             [Panel(per_k(Q[:, WHEELS.index(w)], 1e-3), "time t [s]", f"wheel load Q_{w} [kN]", f"wheel {w}")
-              for w in wheels], f"Vertical wheel-rail forces during the twist test, {shown} (paper Fig. 8); "
-                                f"{height}{valves}", 2),
-            (out / f"dqq{suffix}.png",
-             [Panel(per_k(dqq[:, WHEELS.index(w)]), "time t [s]", f"ΔQ/Q0 of wheel {w} [-]", f"wheel {w}",
-                    hlines=[(limit, f"limit {limit:g}")]) for w in wheels],
-             f"Wheel unloading ΔQ/Q0 (positive: unloaded){valves}", 2),
-            (out / f"bellows{suffix}.png", bellow_panels(rec, ks), f"Bellow pressures and temperatures{valves}", 2)]
+    out = []
+    for setting in valve_settings(outcome.scenario):
+        sub = of_setting(ds, setting)
+        suffix = "" if setting is None else f"_valves={'on' if setting else 'off'}"
+        valves = "" if setting is None else f", valves {'connected' if setting else 'isolated'}"
+        out += [Figure(f"fig8_wheel_loads{suffix}.png",
+                       [Panel(per_case(sub["wheel_load_N"].sel(wheel=w), 1e-3), "time t [s]", f"wheel load Q_{w} [kN]",
+                              f"wheel {w}") for w in wheels],
+                       f"Vertical wheel-rail forces during the twist test, {shown} (paper Fig. 8); {height}{valves}", 2),
+                Figure(f"dqq{suffix}.png",
+                       [Panel(per_case(sub["dqq"].sel(wheel=w)), "time t [s]", f"ΔQ/Q0 of wheel {w} [-]", f"wheel {w}",
+                              hlines=[(limit, f"limit {limit:g}")]) for w in wheels],
+                       f"Wheel unloading ΔQ/Q0 (positive: unloaded){valves}", 2),
+                Figure(f"bellows{suffix}.png", bellow_panels(sub), f"Bellow pressures and temperatures{valves}", 2)]
+    return out
+
+
+RUNNERS = {"twist": Runner(run, figures)}

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from .results import Progress, atomic_write, jsonable, read_rows, write_rows
-from .scenario import Scenario
+from .experiments import Scenario
 
 #: Relative differences below this are the solvers' noise floor (Newton tolerance, round-off).
 NOISE_FLOOR = 1e-9

@@ -25,7 +25,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from cosim.cli import _k_list  # noqa: E402
-from cosim.curve import simulate_curve  # noqa: E402
+from cosim.runner import run  # noqa: E402
 from cosim.results import k_label, write_rows  # noqa: E402
 from cosim.scenario import load_scenario  # noqa: E402
 
@@ -59,13 +59,14 @@ def main(argv=None) -> int:
     rows = []
     for label, overrides in VARIANTS:
         t0 = time.perf_counter()
-        scenario = load_scenario(SCENARIO, [*overrides, f"solver.jobs={args.jobs}"], args.k)
-        ks, rec, diagnoses, _ = simulate_curve(scenario, valves=True)
-        for j, k in enumerate(ks):
-            rows.append({"variant": label, "overrides": "; ".join(overrides), "k_W_per_K": k,
-                         "air_injected_kg": float(rec["air_from_supply_kg"][-1, j]),
-                         "air_exhausted_kg": float(rec["air_to_atmosphere_kg"][-1, j]),
-                         "diverged": "; ".join(diagnoses)})
+        scenario = load_scenario(SCENARIO, [*overrides, f"solver.jobs={args.jobs}", "curve.valve_settings=[true]"],
+                                 args.k)
+        outcome = run(scenario)
+        ks = [row["k_W_per_K"] for row in outcome.rows]
+        for row in outcome.rows:
+            rows.append({"variant": label, "overrides": "; ".join(overrides), "k_W_per_K": row["k_W_per_K"],
+                         "air_injected_kg": row["air_injected_kg"], "air_exhausted_kg": row["air_exhausted_kg"],
+                         "diverged": outcome.diverged or ""})
         print(f"{label:<36} " + "  ".join(f"k={k_label(k)}: {1e3 * r['air_injected_kg']:6.2f} g"
                                            for k, r in zip(ks, rows[-len(ks):]))
               + f"   ({time.perf_counter() - t0:.1f} s)", file=sys.stderr)

@@ -9,8 +9,9 @@ import pytest
 import yaml
 
 from cosim.criteria import window_drift, window_mean
-from cosim.runner import CaseMetrics, Outcome
-from cosim.scenario import Check, load_scenario
+from cosim.checks import CaseMetrics, Check
+from cosim.outcome import Outcome
+from cosim.scenario import load_scenario
 from cosim.schema import ScenarioError
 from helpers import SCENARIOS, short_twist, write_scenario
 from vehicle.car import WHEELS

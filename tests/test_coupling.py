@@ -12,7 +12,7 @@ import exudyn
 
 from cosim.car_runs import build_cosimulation
 from cosim.cli import main
-from cosim.curve import make_car as curve_car, simulate_curve
+from cosim.runner import run
 from cosim.scenario import load_scenario
 from cosim.twist import make_car as twist_car
 from cosim.verify import richardson
@@ -80,9 +80,9 @@ def test_short_curve_air_injected_is_converged_at_the_default_steps():
         variant = dataclasses.replace(scenario, solver=dataclasses.replace(
             s, macro_step_s=s.macro_step_s * factor, mechanics_step_s=s.mechanics_step_s * factor,
             pneumatic_step_s=s.pneumatic_step_s * factor))
-        _, rec, diagnoses, _ = simulate_curve(variant, valves=True)
-        assert not diagnoses
-        air.append(rec["air_from_supply_kg"][-1, 0])
+        outcome = run(dataclasses.replace(variant, curve=dataclasses.replace(variant.curve, valve_settings=(True,))))
+        assert not outcome.diagnoses
+        air.append(outcome.rows[0]["air_injected_kg"])
     assert air[0] > 1e-4                              # the valves do inject air (not vacuous)
     assert abs(air[0] - air[1]) / air[1] < 0.005
 

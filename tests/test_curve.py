@@ -1,6 +1,7 @@
 """Curve entry co-simulated with the full four-point circuit (valves): consumption, levelling, mass balance."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -8,7 +9,7 @@ import pytest
 import yaml
 
 from cosim.criteria import window_mean
-from cosim.curve import car_centre_s_m, make_car, relative_roll_rad, simulate_curve, track_roll_rad
+from cosim.curve import car_centre_s_m, make_car, simulate, summary_row, track_roll_rad
 from cosim.scenario import load_scenario
 from helpers import SCENARIOS, write_scenario
 
@@ -20,6 +21,15 @@ def curve_scenario(tmp_path, k=(0.0,), **curve):
     data["solver"]["jobs"] = 1
     data["curve"].update(curve)
     return load_scenario(write_scenario(tmp_path, data))
+
+
+def simulate_curve(s, valves):
+    """The curve scenario ``s`` with the valves connected or not: (k values, arrays by name with
+    time first and the case last, as (samples, ..., cases), diagnoses, labelled Dataset)."""
+    ds, diag = simulate(dataclasses.replace(s, curve=dataclasses.replace(s.curve, valve_settings=(valves,))))
+    arrays = {name: ds[name].transpose("time", ..., "case").values for name in ds.data_vars if "case" in ds[name].dims}
+    arrays["t_s"] = ds["time"].values
+    return list(ds["k_W_per_K"].values), arrays, diag, ds
 
 
 def test_straight_run_stays_level_and_consumes_no_air(tmp_path):
@@ -96,7 +106,7 @@ def test_roll_is_measured_from_the_track_plane_at_the_car_centre(tmp_path):
     assert car_centre_s_m(s, np.array([0.0]))[0] == pytest.approx(make_car(s).start_s_m, abs=1e-12)
     t = rec["t_s"]
     assert track_roll_rad(s, t)[0] == 0.0 and track_roll_rad(s, t)[-1] == pytest.approx(-c, rel=1e-12)   # in the arc
-    rel = relative_roll_rad(s, rec)
+    rel = rec["roll_rel_rad"]
     assert np.array_equal(rel, rec["roll_rad"] - track_roll_rad(s, t)[:, None])
     level = window_mean(runs["level"][1]["t_s"], runs["level"][1]["roll_rad"][:, 0], 3.0)
     canted = window_mean(t, rel[:, 0], 3.0)
@@ -135,15 +145,14 @@ def test_two_point_layout():
 def test_per_valve_air_adds_up_to_the_supply_total_and_open_fractions_are_fractions(curve_runs):
     # The supply's air can only reach the car through the levelling valves' supply sides (the
     # differential valves join two bellows): their sum is the total injected, to round-off.
-    from cosim.curve import _summary_row
     s, runs = curve_runs
-    ks, rec, _, circuit = runs[True]
-    rec = {**rec, "roll_rel_rad": relative_roll_rad(s, rec)}
-    assert circuit.valve_names
+    ks, _, _, ds = runs[True]
+    valve_names = list(ds["valve"].values)
+    assert valve_names
     for j, k in enumerate(ks):
-        row = _summary_row(True, k, rec, j, s.curve, circuit.valve_names)
-        supplied = sum(row[f"{v}_supply_air_kg"] for v in circuit.valve_names)
+        row = summary_row(ds.isel(case=j), s.curve)
+        supplied = sum(row[f"{v}_supply_air_kg"] for v in valve_names)
         assert supplied == pytest.approx(row["air_injected_kg"], rel=1e-9, abs=1e-12)
         assert row["air_injected_kg"] > 0
-        fractions = [row[f"{v}_{side}_open_fraction"] for v in circuit.valve_names for side in ("supply", "exhaust")]
+        fractions = [row[f"{v}_{side}_open_fraction"] for v in valve_names for side in ("supply", "exhaust")]
         assert all(0.0 <= f <= 1.0 for f in fractions) and max(fractions) > 0.0

@@ -85,7 +85,7 @@ def test_twist_cosimulation_matches_monolithic_reference():
 def test_curve_with_valves_cosimulation_matches_monolithic_reference():
     scenario = load_scenario(SCENARIOS / "curve_entry.yaml",
                              ["solver.jobs=1", "curve.straight_m=12", "curve.duration_s=3"], [0.0])
-    scenario = curve.with_valves(scenario, True)
+    scenario = scenario.with_valves(True)
     T = scenario.curve.duration_s
     cosim = curve_headlines(scenario, _cosim(scenario, curve.make_car, T), window_s=1.0)
     record = run_monolithic(scenario, 0.0, T, scenario.solver.mechanics_step_s)

@@ -1,6 +1,7 @@
 """The co-simulated twist test: equilibrium, symmetry, physics trends, macro-step convergence, CLI checks."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -11,7 +12,7 @@ from cosim import cli
 from cosim.criteria import static_wheel_loads, wheel_unloading, window_mean
 from cosim.scenario import load_scenario
 from cosim.car_runs import build_cosimulation
-from cosim.twist import make_car, rail_heights, simulate_twist, wheelset_x_m
+from cosim.twist import make_car, rail_heights, simulate, wheelset_x_m
 from helpers import SCENARIOS, short_twist, write_scenario
 from vehicle.car import WHEELS, MetroCar
 
@@ -35,11 +36,18 @@ def en_scenario(tmp_path, name="en.yaml", **changes):
 def quasi_static_dqq(s, valves=False):
     """(8, cases) ΔQ/Q0 averaged over the final window, and the full (samples, 8, cases) series;
     levelling valves isolated unless ``valves``."""
-    ks, rec, diag = simulate_twist(s, valves=valves)
+    ds, diag = simulate(dataclasses.replace(s, twist=dataclasses.replace(s.twist, valve_settings=(valves,))))
     assert not diag
-    Q = rec["wheel_load_N"]
-    dqq = wheel_unloading(Q, static_wheel_loads(Q[0]))
-    return window_mean(rec["t_s"], dqq, s.twist.window), dqq
+    dqq = ds["dqq"].transpose("time", "wheel", "case").values
+    return window_mean(ds["time"].values, dqq, s.twist.window), dqq
+
+
+def wheel_loads(s):
+    """(samples, 8, cases) wheel loads Q of the twist scenario ``s`` (asserting no divergence),
+    and the k values of the cases."""
+    ds, diag = simulate(s)
+    assert not diag
+    return ds["wheel_load_N"].transpose("time", "wheel", "case").values, list(ds["k_W_per_K"].values)
 
 
 def test_starts_in_static_equilibrium(tmp_path):
@@ -60,9 +68,7 @@ def test_starts_in_static_equilibrium(tmp_path):
 
 def test_zero_twist_gives_no_unloading(tmp_path):
     s = scenario(tmp_path, **{"twist.twist_per_mille": 0.0})
-    ks, rec, diag = simulate_twist(s)
-    assert not diag
-    Q = rec["wheel_load_N"]
+    Q, _ = wheel_loads(s)
     dqq = wheel_unloading(Q, static_wheel_loads(Q[0]))
     # 1e-6 (0.03 N on a 29 kN wheel): a car left at rest with its static pressures must not
     # move; a force imbalance or coupling drift would show at the 1e-3 level within the 2 s.
@@ -71,9 +77,8 @@ def test_zero_twist_gives_no_unloading(tmp_path):
 
 def test_adiabatic_unloads_more_than_isothermal_and_diagonal_pattern(tmp_path):
     s = scenario(tmp_path)
-    ks, rec, diag = simulate_twist(s)
-    assert not diag and ks == [0.0, math.inf]
-    Q = rec["wheel_load_N"]
+    Q, ks = wheel_loads(s)
+    assert ks == [0.0, math.inf]
     dqq = wheel_unloading(Q, static_wheel_loads(Q[0]))
     adiabatic, isothermal = dqq[..., 0].max(), dqq[..., 1].max()
     # γ = 1.4 stiffer bellows: the adiabatic car must unload clearly more (paper Fig. 8)
@@ -94,9 +99,7 @@ def test_macro_step_convergence(tmp_path):
     for H in (0.005, 0.002, 0.001, 0.0005):
         s = scenario(tmp_path, k_W_per_K=[10.0], **{"solver.macro_step_s": H, "solver.mechanics_step_s": 0.0005,
                                                     "solver.output_interval_s": 0.01})
-        ks, rec, diag = simulate_twist(s)
-        assert not diag
-        results[H] = rec["wheel_load_N"][:, :, 0]
+        results[H] = wheel_loads(s)[0][:, :, 0]
     ref = results[0.0005]
     errors = [np.abs(results[H] - ref).max() for H in (0.005, 0.002, 0.001)]
     assert errors[0] > errors[1] > errors[2], errors

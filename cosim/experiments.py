@@ -1,0 +1,284 @@
+"""What a scenario asks for, as data: the experiments (rig tests, the twist, the curve entry), the
+circuits, the solver settings and the :class:`Scenario` that holds them. Nothing here reads files
+or runs anything: :mod:`cosim.scenario` builds these from YAML and validates them, the runners
+(:mod:`cosim.runner`) consume them.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Dict, Optional, Tuple
+
+from pneumatics.boundary import Supply
+from pneumatics.chamber import Bellow, Tank
+from pneumatics.layouts import car_circuit
+from pneumatics.pipe import Pipe
+from pneumatics.rig import bellow_tank_components
+from pneumatics.valves import DifferentialPressureValve, LevellingValve
+from vehicle.params import VehicleParams
+from vehicle.track import TrackGeometry
+
+from .checks import Check
+
+RIG_KINDS = ("rig_ramp", "rig_sine", "rig_stiffness", "rig_table2")
+CAR_KINDS = ("twist", "curve_entry")
+KINDS = RIG_KINDS + CAR_KINDS
+
+
+# ----------------------------------------------------------------------------------- tests
+@dataclass(frozen=True)
+class RampTest:
+    """Fig. 3: crushing ramp to ``amplitude_m`` in ``ramp_s``, held until ``duration_s``."""
+
+    amplitude_m: float = 0.02
+    ramp_s: float = 1.0
+    duration_s: float = 30.0
+    samples: int = 601
+    configurations: Tuple[str, ...] = ("bellow_tank", "bellow_only")
+
+
+@dataclass(frozen=True)
+class SineTest:
+    """Fig. 5: z = a sin(2 pi f t) for ``duration_s``; the time history is sampled
+    ``samples_per_period`` times a period. The run counts as stabilised when the mean bellow
+    temperature drifts by less than ``stable_drift_K_per_period`` over the last tenth of it
+    (default 1e-3 K: at 1 Hz, less than 4 K an hour)."""
+
+    amplitude_m: float = 0.02
+    frequency_Hz: float = 1.0
+    duration_s: float = 300.0
+    samples_per_period: int = 20
+    stable_drift_K_per_period: float = 1e-3
+
+
+@dataclass(frozen=True)
+class StiffnessTest:
+    """Fig. 6: K_dyn (eq. 9) on the periodic steady state for each frequency."""
+
+    amplitude_m: float = 0.02
+    frequencies_Hz: Tuple[float, ...] = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0)
+
+
+@dataclass(frozen=True)
+class QuasiStaticTest:
+    """Table 2: slope of a slow small ramp."""
+
+    amplitude_m: float = 1e-4
+    ramp_s: float = 20.0
+
+
+RIG_TESTS = {"rig_ramp": RampTest, "rig_sine": SineTest, "rig_stiffness": StiffnessTest, "rig_table2": QuasiStaticTest}
+
+
+@dataclass(frozen=True)
+class TwistTest:
+    """EN 14363 twist (Fig. 7): the rails under ``raised_wheels`` rise by the test height in
+    ``ramp_s`` (smooth cosine ramp), then hold for ``hold_s``.
+
+    Test height = twist x base. The twist limit of the track the car must negotiate depends on the
+    base length 2a (here the bogie centre distance): 7 permille for 2a <= 4 m, 20/2a + 2 permille
+    for 4 m < 2a <= 20 m, 3 permille above (the rule commonly quoted from EN 14363; set
+    ``twist_per_mille`` to override it).
+
+    EN 14363 twists the car over both bases together: the carbody twist g* over the bogie
+    centre distance 2a* and the bogie twist g+ over the wheelbase 2a+. ``bogie_base_m`` (2a+,
+    the car's wheelbase) switches the bogie twist on: the front bogie's rails on the raised side
+    (``raised_wheels`` must then be that side of the front bogie, e.g. [1R, 2R]) are in addition
+    twisted by h+ = g+ x 2a+ about the bogie centre, leading wheelset + h+/2, trailing - h+/2
+    (``bogie_twist_per_mille``, default the EN 14363 limit for 2a+); see
+    :func:`cosim.twist.rail_heights` for the track geometry. Without it: Fig. 7, the carbody twist
+    alone.
+
+    ``window_s``: final window over which the quasi-static end values are averaged (default 5 s,
+    or the whole hold if that is shorter); ``settle_drift``: the case counts as settled when every
+    wheel's ΔQ/Q0 drifts by less than that over the final window: its mean over the final window
+    differs from its mean over the window before by less (an undamped ~1 Hz sway left in the
+    window moves the mean by at most 4 b / (w W) of its amplitude b).
+    ``valve_settings``: run with the levelling valves isolated (false) and/or connected (true);
+    null: one run as ``circuit.valves`` says.
+    """
+
+    base_m: float = 10.0
+    twist_per_mille: Optional[float] = None
+    raised_wheels: Tuple[str, ...] = ("1R", "2R")
+    ramp_s: float = 5.0
+    hold_s: float = 35.0
+    bogie_base_m: Optional[float] = None
+    bogie_twist_per_mille: Optional[float] = None
+    window_s: Optional[float] = None
+    settle_drift: float = 1e-3
+    valve_settings: Optional[Tuple[bool, ...]] = None
+
+    @property
+    def twist(self) -> float:
+        if self.twist_per_mille is not None:
+            return self.twist_per_mille / 1000.0
+        return en14363_twist_limit(self.base_m)
+
+    @property
+    def height_m(self) -> float:
+        return self.twist * self.base_m
+
+    @property
+    def bogie_twist(self) -> float:
+        """g+ [-]: 0 without ``bogie_base_m``."""
+        if self.bogie_base_m is None:
+            return 0.0
+        if self.bogie_twist_per_mille is not None:
+            return self.bogie_twist_per_mille / 1000.0
+        return en14363_twist_limit(self.bogie_base_m)
+
+    @property
+    def bogie_height_m(self) -> float:
+        """h+ = g+ x 2a+ [m]: the height difference between the front bogie's wheelsets."""
+        return self.bogie_twist * (self.bogie_base_m or 0.0)
+
+    @property
+    def duration_s(self) -> float:
+        return self.ramp_s + self.hold_s
+
+    @property
+    def window(self) -> float:
+        """The final averaging window [s]."""
+        return self.window_s if self.window_s is not None else min(DEFAULT_WINDOW_S, self.hold_s)
+
+
+#: default length of the final window the quasi-static end values are averaged over [s]
+DEFAULT_WINDOW_S = 5.0
+
+
+def en14363_twist_limit(base_m: float) -> float:
+    """Track twist [-] for a base 2a [m]: 7e-3 (2a <= 4 m), (20/2a + 2)e-3 (<= 20 m), 3e-3 above."""
+    if base_m <= 4.0:
+        return 7e-3
+    if base_m <= 20.0:
+        return (20.0 / base_m + 2.0) * 1e-3
+    return 3e-3
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Co-simulation settings (see cosim/master.py for the scheme)."""
+
+    macro_step_s: float = 0.005
+    mechanics_step_s: float = 0.005
+    pneumatic_step_s: float = 0.005
+    coupling: str = "linearised"
+    output_interval_s: float = 0.02
+    jobs: int = 2
+
+
+@dataclass(frozen=True)
+class VerifySettings:
+    """``pneumorail verify``: the run is repeated with every step halved ``levels`` times; it
+    fails when a headline metric's estimated relative discretisation error (Richardson) at
+    the scenario's own steps exceeds ``tolerance``."""
+
+    tolerance: float = 0.005
+    levels: int = 2
+
+
+@dataclass(frozen=True)
+class CurveTest:
+    """Curve entry (paper §4.2, Fig. 9): straight, clothoid transition, circular arc, at constant
+    speed. The car starts at rest relative to the straight (rear wheelset at s = 0), so
+    ``straight_m`` must hold the whole car. ``valve_settings``: runs with the levelling and
+    differential valves disconnected (false) and connected (true). ``window_s``: final window
+    over which the end values (roll, bellow crushing) are averaged (default 5 s, or the whole run
+    if shorter)."""
+
+    speed_m_per_s: float = 10.0
+    straight_m: float = 20.0
+    transition_m: float = 15.0
+    radius_m: float = 100.0
+    arc_m: float = 300.0
+    cant_rad: float = 0.0
+    direction: int = 1
+    duration_s: float = 30.0
+    valve_settings: Tuple[bool, ...] = (False, True)
+    window_s: Optional[float] = None
+
+    @property
+    def window(self) -> float:
+        """The final averaging window [s]."""
+        return self.window_s if self.window_s is not None else min(DEFAULT_WINDOW_S, self.duration_s)
+
+    def track(self) -> TrackGeometry:
+        return TrackGeometry.curve_entry(self.straight_m, self.transition_m, self.radius_m, self.arc_m,
+                                         cant_rad=self.cant_rad, direction=self.direction)
+
+
+# ----------------------------------------------------------------------------------- circuits
+@dataclass(frozen=True)
+class RigCircuit:
+    bellow: Bellow
+    tank: Optional[Tank]
+    pipe: Pipe
+    p0_Pa: float
+
+    def components(self, with_tank: bool = True) -> Dict[str, object]:
+        return bellow_tank_components(self.bellow, self.tank if with_tank else None, self.pipe)
+
+    def initial_pressures(self, components) -> Dict[str, float]:
+        return {n: self.p0_Pa for n, c in components.items() if isinstance(c, (Bellow, Tank))}
+
+
+@dataclass(frozen=True)
+class CarCircuit:
+    """The car's circuit: ``four_point`` (one levelling valve per bellow) or ``two_point``;
+    ``valves`` false isolates every bellow (with its tank) from the supply and the other bellows."""
+
+    layout: str
+    bellow: Bellow
+    tank: Optional[Tank]
+    pipe: Pipe
+    valves: bool
+    levelling_valve: LevellingValve
+    differential_valve: Optional[DifferentialPressureValve]
+    supply: Supply
+    cross_pipe: Optional[Pipe]
+    explicit: Optional[Tuple[Tuple[str, object], ...]] = None
+
+    def components(self) -> Dict[str, object]:
+        if self.explicit is not None:
+            return dict(self.explicit)
+        return car_circuit(self.bellow, self.tank, self.pipe,
+                           levelling=self.levelling_valve if self.valves else None,
+                           differential=self.differential_valve if self.valves else None,
+                           supply=self.supply, points=4 if self.layout == "four_point" else 2,
+                           cross_pipe=self.cross_pipe)
+
+
+# ----------------------------------------------------------------------------------- scenario
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario (built by :func:`cosim.scenario.load_scenario`): where it came from
+    (file, content hash, overrides, every file read), its k values, and the typed sections of its
+    kind -- ``rig`` and ``test`` for the rig kinds, ``vehicle``, ``circuit``, ``twist`` or
+    ``curve``, ``solver``, ``verify`` and ``checks`` for the car kinds."""
+
+    file: Path
+    kind: str
+    name: str
+    description: str
+    k_W_per_K: Tuple[float, ...]
+    content_sha256: str
+    overrides: Tuple[str, ...] = ()
+    #: (path relative to the scenario file, sha256) of every file read: the scenario, parameter files
+    files_sha256: Tuple[Tuple[str, str], ...] = ()
+    rig: Optional[RigCircuit] = None
+    test: Any = None
+    vehicle: Optional[VehicleParams] = None
+    circuit: Optional[CarCircuit] = None
+    twist: Optional[TwistTest] = None
+    curve: Optional[CurveTest] = None
+    solver: SolverSettings = SolverSettings()
+    verify: VerifySettings = VerifySettings()
+    checks: Tuple[Check, ...] = ()
+    raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+    def with_valves(self, valves: bool) -> "Scenario":
+        """The same car scenario with its levelling (and differential) valves connected (True) or
+        isolated (False)."""
+        return dataclasses.replace(self, circuit=dataclasses.replace(self.circuit, valves=valves))

@@ -1,0 +1,117 @@
+"""What a run computed, in memory: :class:`Outcome`. The runners (:mod:`cosim.runner`) return
+it, :mod:`cosim.writer` turns it into files, ``check`` and sweeps evaluate it."""
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+from .checks import CaseMetrics, Check, check_report, check_value, passes
+from .experiments import Scenario
+
+#: warnings about results (validity, settling) go here, not through the progress lines: --quiet
+#: silences progress only
+LOG = logging.getLogger("pneumorail")
+
+
+@dataclass
+class Outcome:
+    """The result of running one scenario.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        What ran (validated, with overrides applied).
+    rows : list of dict
+        The summary: one row per case (k value, valve setting, rig configuration ...), column
+        names with units (``roll_max_rad``, ``T_bellow_max_K``); ``summary.csv``.
+    shown : tuple of str
+        The columns of :meth:`report` (empty: every column).
+    series : dict of str to xarray.Dataset
+        Labelled time series (units in each variable's ``units`` attribute), by name: for a car
+        run one Dataset, dimensions ``time`` x ``wheel`` / ``bellow`` / ``valve`` / ``link`` x
+        ``case`` (see :mod:`cosim.series`); for a rig one Dataset per run. Written as
+        ``timeseries/<name>[_<case>].csv``.
+    metrics : dict of str to float
+        Totals over the cases (the largest of each headline metric; NaN if a case diverged).
+    cases : list of CaseMetrics
+        The checkable metrics of each case (what ``checks:`` are evaluated on).
+    diagnoses : list of str
+        Why cases stopped early (divergence); empty when every case ran to its end.
+    warnings : list of str
+        Results outside the model's validity or not settled (also logged as they arise).
+    info : dict
+        Further run facts for ``run.json`` (e.g. the twist height, the static wheel loads).
+    wall_s : float
+        Wall time of the computation [s].
+    """
+
+    scenario: Scenario
+    rows: List[Dict[str, object]]
+    shown: Tuple[str, ...] = ()
+    series: Dict[str, object] = field(default_factory=dict)
+    metrics: Dict[str, float] = field(default_factory=dict)
+    cases: List[CaseMetrics] = field(default_factory=list)
+    diagnoses: List[str] = field(default_factory=list)
+    warnings: List[str] = field(default_factory=list)
+    info: Dict[str, object] = field(default_factory=dict)
+    wall_s: float = 0.0
+
+    @property
+    def diverged(self) -> Optional[str]:
+        """The diagnoses in one line, or None when every case ran to its end."""
+        return "; ".join(self.diagnoses) or None
+
+    def report(self, columns: Optional[Sequence[str]] = None) -> str:
+        """The summary as a plain-text table."""
+        if not self.rows:
+            return "(no results)"
+        cols = list(columns or self.shown or dict.fromkeys(c for r in self.rows for c in r))
+        cells = [[_cell(r.get(c)) for c in cols] for r in self.rows]
+        widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(cols)]
+        lines = ["  ".join(c.rjust(w) for c, w in zip(cols, widths))]
+        lines += ["  ".join(v.rjust(w) for v, w in zip(row, widths)) for row in cells]
+        if self.diverged:
+            lines.append(f"DIVERGED: {self.diverged}")
+        return "\n".join(lines)
+
+    def check_value(self, check: Check) -> Tuple[float, str]:
+        """See :func:`cosim.checks.check_value`."""
+        return check_value(check, self.cases, self.metrics)
+
+    def check_results(self) -> List[Tuple[Check, float]]:
+        return [(c, self.check_value(c)[0]) for c in self.scenario.checks]
+
+    def checks_hold(self) -> bool:
+        return all(passes(c, v) for c, v in self.check_results())
+
+    def check_report(self) -> str:
+        return check_report(self.scenario.checks, self.cases, self.metrics)
+
+
+@dataclass(frozen=True)
+class Runner:
+    """How one scenario kind runs: ``run(scenario, progress) -> Outcome`` computes (writes
+    nothing), ``figures(outcome) -> [cosim.plots.Figure]`` says what to draw."""
+
+    run: Callable[[Scenario, object], Outcome]
+    figures: Callable[[Outcome], list]
+
+
+def warn(found: List[str], message: str) -> None:
+    """Keep a warning for the outcome (and run.json), and log it now."""
+    found.append(message)
+    LOG.warning(message)
+
+
+def largest(values) -> float:
+    """The largest value; NaN if any is NaN (a diverged case)."""
+    values = [float(v) for v in values]
+    return math.nan if any(math.isnan(v) for v in values) else max(values)
+
+
+def _cell(v) -> str:
+    if isinstance(v, float):
+        return "inf" if math.isinf(v) else f"{v:.5g}"
+    return str(v)
