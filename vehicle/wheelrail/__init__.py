@@ -1,16 +1,22 @@
-"""Wheel-rail contact physics, pure numpy/scipy (no exudyn, no pneumatics/cosim imports), so it
-can build the tables that exudyn user functions later interpolate.
+"""Wheel-rail contact physics, pure numpy/scipy (no exudyn, no pneumatics/cosim imports) except
+the exudyn wheelset model :mod:`vehicle.wheelrail.wheelset`, which this package does not import.
 
 * :mod:`vehicle.wheelrail.profiles` -- SIMPACK ``.prw``/``.prr`` and 2-column profile readers;
 * :mod:`vehicle.wheelrail.geometry` -- rigid contact search, :class:`ContactTable`
   (``from_profiles``, ``from_csv``, ``default``, ``at(y)``), equivalent conicity;
 * :mod:`vehicle.wheelrail.creep` -- Kalker linear theory (Table E.3), Hertz ellipse,
   Shen-Hedrick-Elkins saturation, wheelset creepages;
+* :mod:`vehicle.wheelrail.contact_law` -- the contact force law of a wheelset on track (Hertz
+  normal force, creepages, saturated creep forces, generalized forces), pure functions usable
+  with floats, arrays or exudyn symbolic expressions;
+* :mod:`vehicle.wheelrail.wheelset` -- a free wheelset on track in exudyn with that law (imports
+  exudyn, hence not imported here);
 * ``python -m vehicle.wheelrail.derive_table`` rewrites the shipped default table.
 
 See ``docs/wheel_rail.md``.
 """
 
+from .contact_law import ContactLawTable, WheelsetParams, WheelsetState
 from .creep import (creep_forces, creepages, hertz_semi_axes, kalker_coefficients,
                     kalker_linear, shen_hedrick_elkins)
 from .geometry import ContactGeometry, ContactState, ContactTable, PairSetup, default_setup
@@ -18,6 +24,7 @@ from .profiles import Profile, read_profile, read_simpack_profile, write_simpack
 
 __all__ = [
     "ContactGeometry", "ContactState", "ContactTable", "PairSetup", "default_setup",
+    "ContactLawTable", "WheelsetParams", "WheelsetState",
     "Profile", "read_profile", "read_simpack_profile", "write_simpack_profile",
     "creep_forces", "creepages", "hertz_semi_axes", "kalker_coefficients", "kalker_linear",
     "shen_hedrick_elkins",

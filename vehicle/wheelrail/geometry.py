@@ -422,6 +422,44 @@ class ContactTable:
         return cls({h: data[:, j] for j, h in enumerate(header)}, meta)
 
     @classmethod
+    def cone(cls, conicity: float, r0_m: float = 0.46, half_spacing_m: float = 0.75,
+             y_max_mm: float = 12.0, dy_mm: float = 0.1,
+             rail_crown_radius_m: float = 0.3) -> "ContactTable":
+        """Analytic table of a pure cone (tan delta = ``conicity``) on knife-edge rails at
+        y = +-``half_spacing_m`` (b): the contact points stay at the rails, so
+        r_L,R = r0 +- lambda y exactly, roll tan(phi) = lambda y / b, rise dz ~ lambda y^2 / b
+        (both wheel points on their rail), contact angles gamma_L,R = atan(lambda) +- phi. For
+        the Hertz ellipse the wheel is straight across (kw = 0) and the rail has a crown of
+        ``rail_crown_radius_m``. The textbook wheelset for
+        Klingel's formula: its equivalent conicity is lambda at every amplitude."""
+        lam, b = float(conicity), float(half_spacing_m)
+        if not (0 < lam < 1 and r0_m > 0 and b > 0 and rail_crown_radius_m > 0):
+            raise ValueError("need 0 < conicity < 1 and positive r0, half spacing, crown radius")
+        n = int(round(y_max_mm / dy_mm))
+        y_mm = np.arange(-n, n + 1) * dy_mm
+        y = y_mm * 1e-3
+        rL, rR = r0_m + lam * y, r0_m - lam * y
+        # wheel points at axle coordinates uL = b - y, uR = -b - y touch the rails (z = 0):
+        # h + u sin(phi) - r cos(phi) = 0 on both sides
+        phi = np.arctan2(rL - rR, 2.0 * b)
+        h = rL * np.cos(phi) - (b - y) * np.sin(phi)
+        delta = math.atan(lam)
+        nan = np.full(y.size, np.nan)
+        cols = {
+            "y_ws_mm": y_mm, "roll_rad": phi, "dz_mm": 1e3 * (h - r0_m),
+            "r_L_m": rL, "r_R_m": rR, "gamma_L_rad": delta + phi, "gamma_R_rad": delta - phi,
+            "yw_L_mm": -y_mm, "yw_R_mm": y_mm, "yr_L_mm": 0 * y, "yr_R_mm": 0 * y,
+            "yc_L_m": np.full(y.size, b), "yc_R_m": np.full(y.size, -b),
+            "kw_L_1pm": 0 * y, "kw_R_1pm": 0 * y,
+            "kr_L_1pm": np.full(y.size, 1.0 / rail_crown_radius_m),
+            "kr_R_1pm": np.full(y.size, 1.0 / rail_crown_radius_m),
+            "gap2_L_mm": nan, "gap2_R_mm": nan, "yw2_L_mm": nan, "yw2_R_mm": nan,
+        }
+        meta = {"method": f"analytic cone, conicity {lam!r}, knife-edge rails at +-{b!r} m, "
+                          f"r0 {r0_m!r} m"}
+        return cls(cols, meta)
+
+    @classmethod
     def default(cls) -> "ContactTable":
         """The shipped S1002 / UIC60 1:40 / 1435 mm / r0 = 0.46 m table."""
         return cls.from_csv(DEFAULT_TABLE)

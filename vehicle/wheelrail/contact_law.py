@@ -1,0 +1,407 @@
+"""Contact force law of a wheelset on track (issue 11, item 2), as pure functions.
+
+One law, written once against a small table of math operations (``ops``), evaluates either
+
+* numbers (:data:`SCALAR` with ``math``: the Python force user function of the exudyn model
+  ``vehicle.wheelrail.wheelset``; :data:`NUMPY` for arrays, e.g. along a whole time series), or
+* an exudyn symbolic expression tree (``vehicle.wheelrail.wheelset`` passes its own ``ops``)
+  that exudyn evaluates in C++ (optional there: slower for this law, see that module).
+
+So the force law the tests check without exudyn is, operation for operation, the one exudyn runs.
+This module imports numpy/scipy only (``tests/test_wheelrail.py`` checks the subpackage).
+
+Frames, coordinates, signs
+--------------------------
+Track frame (x forward, y left, z up) moving along the track centre line at the speed V; on a
+curve of curvature kappa (> 0 turns left) it also turns at the rate kappa V. The wheelset's
+coordinates in it (:class:`WheelsetState`): lateral ``y``, vertical ``z`` (rise of the wheelset
+centre above its rigid-contact height at y = 0, i.e. the contact table's ``dz``), ``roll``
+(right-handed about x: left side up), ``yaw`` (about z, relative to the track tangent) and the
+spin rate ``spin_t`` about the axle (V / r0 when rolling freely, > 0 forward). The wheelset body
+itself does not spin (a non-rotating frame); ``spin_t`` is a separate coordinate's rate.
+
+Per wheel (``side`` "L" at y > 0, "R"), from the contact table at the current y (the table is
+the rigid, yaw-free contact geometry, :class:`~vehicle.wheelrail.geometry.ContactTable`):
+rolling radius r, contact angle gamma (track frame, > 0 descending to the track centre), lateral
+contact position yc (track frame), and the wheelset's rigid-contact roll0 and rise dz0.
+
+* **Normal force** (Hertz, unilateral, along the contact normal): the contact point of the
+  actual wheelset is below the rigid-contact one by the vertical overlap
+  ``delta = (dz0 - z) + l (roll0 - roll)``, ``l = yc - y`` (lateral lever from the wheelset
+  centre); the overlap along the normal is ``delta cos(gamma)`` (two tangent planes inclined by
+  gamma) and ``N = C_H (delta cos gamma)^1.5 + c d(delta cos gamma)/dt``, clipped at 0, and 0 when
+  delta <= 0. C_H and c are those of the car's vertical contact (``VehicleParams``), so the
+  stiffness is the car's along the normal instead of the vertical.
+* **Creepages** (:func:`vehicle.wheelrail.creep.creepages` extended to the curve; relative
+  velocity of wheel to rail at the contact over V)::
+
+      xi_x = (V (1 - kappa yc) - l yaw_t - spin_t r) / V
+      xi_y = (y_t + r roll_t - V yaw) / (V cos gamma)
+      phi  = ((yaw_t + kappa V) cos gamma -+ spin_t sin gamma) / V     (- left, + right)
+
+  (the rail under a contact at yc runs at V (1 - kappa yc) in the turning frame; the absolute yaw
+  rate is yaw_t + kappa V).
+* **Creep forces**: Kalker's linear theory, coefficients ``f11 = G a b C11``,
+  ``f22 = G a b C22``, ``f23 = G (ab)^1.5 C23``, ``f33 = G (ab)^2 C33`` with the Hertz ellipse
+  (a, b) of the contact's curvatures (table columns ``kw``, ``kr``, and cos(delta)/r along the
+  track). The ellipse shape a/b does not depend on the load and its size scales as N^(1/3), so
+  :class:`ContactLawTable` stores the coefficients at a reference load and the law scales them
+  by (N/N_ref)^(2/3), ^1, ^(4/3): exact Hertz, no per-step ellipse solve. Then
+  Shen-Hedrick-Elkins saturation to mu N (factor eps on F_x, F_y and the spin moment M_z).
+* **Contact frame**: t1 = (cos yaw, sin yaw, 0) (rolling direction of the yawed wheel), t2 the
+  in-plane lateral direction pointing left, n from rail into wheel (for the left wheel
+  n = (sin(yaw) sin(gamma), -cos(yaw) sin(gamma), cos(gamma))); the force on the wheel
+  ``F = F_x t1 + F_y t2 + N n`` acts at ``p = (-l sin yaw, l cos yaw, -r)`` from the wheelset
+  centre, with the spin moment ``M_z n``. Its moment about the axle drives the spin coordinate;
+  the rest acts on the non-rotating wheelset body.
+
+The spinning wheelset's gyroscopic moments (spin inertia I_s): ``+I_s spin_t (yaw_t + kappa V)``
+about x and ``-I_s spin_t roll_t`` about z; the turning frame adds the centrifugal force
+``-m kappa V^2`` along y (no cant).
+
+Simplifications: the table is the rigid, yaw-free geometry (yaw neither moves the contact
+points nor changes r, gamma); the small elastic roll beyond roll0 changes the overlap but not
+gamma; one contact point per wheel (the table's; the flange arises when the table's contact
+jumps there); Kalker's linear theory with heuristic saturation (no FASTSIM/Polach).
+
+Note on the kinematics: the roll rate enters the lateral creepage (r roll_t: the contact point
+is r below the centre). On a profile whose rigid roll follows y (roll0' = d roll0/dy) lateral pure
+rolling is y_t (1 + r0 roll0') = V yaw, so the kinematic wavelength is Klingel's times
+sqrt(1 + r0 roll0'): +0.76 % for a 1:40 cone (roll0' = lambda / b), ~+1 % for S1002/UIC60
+at 3 mm. Klingel's formula neglects the roll.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .creep import POISSON_RATIO, SHEAR_MODULUS_PA, hertz_semi_axes, kalker_coefficients
+from .geometry import ContactTable
+
+__all__ = [
+    "WheelsetParams",
+    "WheelsetState",
+    "ContactLawTable",
+    "GEOMETRY_COLUMNS",
+    "SCALAR",
+    "NUMPY",
+    "wheel_contact",
+    "force_and_moment",
+    "wheelset_forces",
+    "generalized_forces",
+]
+
+GRAVITY_M_PER_S2 = 9.81
+
+
+@dataclass(frozen=True)
+class WheelsetParams:
+    """A wheelset and its contact (SI). Defaults: the metro car's wheelset (``VehicleParams``:
+    800 kg, 494 / 49 / 494 kg m^2) under its static axle load (carbody 17 t and bogies 1.9 t on
+    four axles: 2 x 29.43 kN wheel load, of which 51.0 kN comes through the axleboxes), the car's
+    vertical Hertz constant and contact damping, and mu = 0.36 (the issue's Nadal setting)."""
+
+    mass_kg: float = 800.0
+    roll_inertia_kg_m2: float = 494.0
+    spin_inertia_kg_m2: float = 49.0  # about the axle
+    yaw_inertia_kg_m2: float = 494.0
+    # vertical load on the axle from the bogie (primary springs), downwards, N
+    axle_load_N: float = (17000.0 * GRAVITY_M_PER_S2 / 2.0 + 1900.0 * GRAVITY_M_PER_S2) / 2.0
+    gravity_m_per_s2: float = GRAVITY_M_PER_S2
+    hertz_constant_N_per_m1_5: float = 1.0e11  # VehicleParams.hertz_constant_N_per_m1_5
+    contact_damping_N_s_per_m: float = 5.0e4  # VehicleParams.contact_damping_N_s_per_m
+    friction_coefficient: float = 0.36
+    shear_modulus_Pa: float = SHEAR_MODULUS_PA
+    poisson_ratio: float = POISSON_RATIO
+
+    def __post_init__(self):
+        for name in ("mass_kg", "roll_inertia_kg_m2", "spin_inertia_kg_m2", "yaw_inertia_kg_m2",
+                     "hertz_constant_N_per_m1_5", "friction_coefficient", "shear_modulus_Pa"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive")
+        if not (self.axle_load_N >= 0 and self.contact_damping_N_s_per_m >= 0):
+            raise ValueError("axle_load_N and contact_damping_N_s_per_m must be >= 0")
+
+    @property
+    def static_wheel_load_N(self) -> float:
+        """Vertical load per wheel at rest on level track."""
+        return 0.5 * (self.axle_load_N + self.mass_kg * self.gravity_m_per_s2)
+
+
+class WheelsetState(NamedTuple):
+    """Wheelset coordinates in the track frame and their rates (see the module docstring)."""
+
+    y: object
+    z: object
+    roll: object
+    yaw: object
+    y_t: object
+    z_t: object
+    roll_t: object
+    yaw_t: object
+    spin_t: object
+
+
+# ----------------------------------------------------------------------------- ops
+class _ScalarOps:
+    """Plain floats (``math``); ``where`` picks like exudyn's IfThenElse."""
+
+    sqrt = staticmethod(math.sqrt)
+    sin = staticmethod(math.sin)
+    cos = staticmethod(math.cos)
+    pow = staticmethod(math.pow)
+
+    @staticmethod
+    def where(cond, a, b):
+        return a if cond else b
+
+    @staticmethod
+    def max(a, b):
+        return a if a >= b else b
+
+    @staticmethod
+    def min(a, b):
+        return a if a <= b else b
+
+    @staticmethod
+    def const(x):
+        return float(x)
+
+
+class _NumpyOps:
+    """Arrays (element-wise); every branch is finite, so ``np.where`` warns about nothing."""
+
+    sqrt = staticmethod(np.sqrt)
+    sin = staticmethod(np.sin)
+    cos = staticmethod(np.cos)
+    pow = staticmethod(np.power)
+    where = staticmethod(np.where)
+    max = staticmethod(np.maximum)
+    min = staticmethod(np.minimum)
+
+    @staticmethod
+    def const(x):
+        return float(x)
+
+
+SCALAR = _ScalarOps()
+NUMPY = _NumpyOps()
+
+
+# ----------------------------------------------------------------------------- geometry table
+#: per-wheel and wheelset columns the force law reads (``k*`` creep-coefficient columns at the
+#: table's reference load; ``roll0``/``dz0`` the rigid-contact roll [rad] and rise [m])
+GEOMETRY_COLUMNS = (
+    "r_L", "r_R", "gamma_L", "gamma_R", "yc_L", "yc_R", "roll0", "dz0",
+    "k11_L", "k22_L", "k23_L", "k33_L", "k11_R", "k22_R", "k23_R", "k33_R",
+)
+
+
+class ContactLawTable:
+    """The contact table in SI plus Kalker's creep coefficients per row, for the force law.
+
+    ``k11 = G a b C11``, ``k22 = G a b C22``, ``k23 = G (ab)^1.5 C23``, ``k33 = G (ab)^2 C33``
+    with the Hertz ellipse of that row's contact at ``reference_load_N`` (the law rescales them
+    with the actual normal force). Interpolation is linear in y, as
+    :meth:`ContactTable.at <vehicle.wheelrail.geometry.ContactTable.at>`.
+    """
+
+    def __init__(self, table: ContactTable, params: WheelsetParams | None = None,
+                 reference_load_N: float = 50.0e3):
+        p = params or WheelsetParams()
+        if not reference_load_N > 0:
+            raise ValueError("reference_load_N must be positive")
+        self.table = table
+        self.reference_load_N = float(reference_load_N)
+        c = table.columns
+        self.y = c["y_ws_mm"] * 1e-3
+        roll = c["roll_rad"]
+        cols = {"roll0": roll, "dz0": c["dz_mm"] * 1e-3}
+        G, nu = p.shear_modulus_Pa, p.poisson_ratio
+        for side, sgn in (("L", 1.0), ("R", -1.0)):
+            r, gam = c[f"r_{side}_m"], c[f"gamma_{side}_rad"]
+            cols[f"r_{side}"], cols[f"gamma_{side}"] = r, gam
+            cols[f"yc_{side}"] = c[f"yc_{side}_m"]
+            delta = gam - sgn * roll  # contact angle relative to the axle
+            A = np.cos(delta) / (2.0 * r)  # rolling circle; straight rail along the track
+            B = 0.5 * (c[f"kw_{side}_1pm"] + c[f"kr_{side}_1pm"])
+            k = np.empty((4, r.size))
+            for i in range(r.size):
+                a, b = hertz_semi_axes(self.reference_load_N, float(A[i]), float(B[i]), G, nu)
+                C = kalker_coefficients(a / b, nu)
+                ab = a * b
+                k[:, i] = (G * ab * C.C11, G * ab * C.C22, G * ab ** 1.5 * C.C23,
+                           G * ab ** 2 * C.C33)
+            for j, name in enumerate(("k11", "k22", "k23", "k33")):
+                cols[f"{name}_{side}"] = k[j]
+        self.values = np.vstack([cols[n] for n in GEOMETRY_COLUMNS])  # (columns, rows)
+        self.slopes = np.diff(self.values, axis=1) / np.diff(self.y)  # (columns, rows - 1)
+
+    @property
+    def y_range_m(self) -> tuple[float, float]:
+        return float(self.y[0]), float(self.y[-1])
+
+    def segment(self, y: float) -> tuple[int, float, np.ndarray, np.ndarray]:
+        """Table interval holding y: (index i, y_i, values at y_i, slopes on [y_i, y_i+1]).
+        Beyond the table the end interval is returned (linear extrapolation)."""
+        i = int(np.searchsorted(self.y, y, side="right")) - 1
+        i = min(max(i, 0), self.y.size - 2)
+        return i, float(self.y[i]), self.values[:, i], self.slopes[:, i]
+
+    def geometry(self, y) -> dict:
+        """Columns at y (scalar or array), linearly interpolated, plus the slopes of roll0 and
+        dz0 (``droll0``, ``ddz0``, for the rate of the overlap): the ``geo`` of the force law."""
+        y_arr = np.asarray(y, dtype=float)
+        i = np.clip(np.searchsorted(self.y, y_arr, side="right") - 1, 0, self.y.size - 2)
+        dy = y_arr - self.y[i]
+        out = {}
+        for j, name in enumerate(GEOMETRY_COLUMNS):
+            v = self.values[j, i] + self.slopes[j, i] * dy
+            out[name] = float(v) if v.ndim == 0 else v
+        for name, key in (("roll0", "droll0"), ("dz0", "ddz0")):
+            s = self.slopes[GEOMETRY_COLUMNS.index(name), i]
+            out[key] = float(s) if np.ndim(s) == 0 else s
+        return out
+
+
+# ----------------------------------------------------------------------------- the law
+def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
+                  reference_load_N: float) -> dict:
+    """Contact of one wheel (see the module docstring).
+
+    ``geo`` maps the :data:`GEOMETRY_COLUMNS` (and ``droll0``, ``ddz0``) to values or
+    expressions at the current y. Returns a dict of values or expressions: ``N`` (normal
+    force), ``fx``, ``fy``, ``mz`` (Kalker's linear creep forces and spin moment, contact frame),
+    ``eps`` (Shen-Hedrick-Elkins factor: the forces are eps fx, eps fy, eps mz), ``xi_x``,
+    ``xi_y``, ``phi`` (creepages), ``delta`` (vertical overlap, m) and the geometry the force
+    acts through (``r``, ``lever`` = yc - y, ``cos_gamma``, ``sin_gamma``, ``sign`` +1 left)."""
+    if side not in ("L", "R"):
+        raise ValueError("side must be 'L' or 'R'")
+    s = 1.0 if side == "L" else -1.0
+    c0 = ops.const(0.0)
+    r, gam, yc = geo["r_" + side], geo["gamma_" + side], geo["yc_" + side]
+    lever = yc - st.y
+    cg, sg = ops.cos(gam), ops.sin(gam)
+    # --- normal force: Hertz along the normal, unilateral ---
+    delta = (geo["dz0"] - st.z) + lever * (geo["roll0"] - st.roll)
+    delta_t = (geo["ddz0"] + lever * geo["droll0"]) * st.y_t - st.z_t - lever * st.roll_t
+    dn = ops.max(delta, c0) * cg
+    N = ops.where(delta > 0.0, ops.max(p.hertz_constant_N_per_m1_5 * ops.pow(dn, 1.5)
+                                       + p.contact_damping_N_s_per_m * cg * delta_t, c0), c0)
+    # --- Kalker coefficients at this load: ellipse size ~ N^(1/3) ---
+    load = N * (1.0 / reference_load_N)
+    ab = ops.pow(load, 2.0 / 3.0)  # a b / (a b)_ref
+    f11, f22 = geo["k11_" + side] * ab, geo["k22_" + side] * ab
+    f23, f33 = geo["k23_" + side] * load, geo["k33_" + side] * ops.pow(load, 4.0 / 3.0)
+    # --- creepages ---
+    inv_V = 1.0 / V
+    xi_x = (V * (1.0 - kappa * yc) - lever * st.yaw_t - st.spin_t * r) * inv_V
+    xi_y = (st.y_t + r * st.roll_t - V * st.yaw) * inv_V / cg
+    phi = ((st.yaw_t + kappa * V) * cg - s * st.spin_t * sg) * inv_V
+    # --- Kalker linear + Shen-Hedrick-Elkins ---
+    fx = -f11 * xi_x
+    fy = -f22 * xi_y - f23 * phi
+    mz = f23 * xi_y - f33 * phi
+    u = ops.sqrt(ops.pow(fx, 2.0) + ops.pow(fy, 2.0)) / ops.max(
+        p.friction_coefficient * N, ops.const(1e-9))
+    # eps = 1 - u/3 + u^2/27 = ((u - 4.5)^2 + 6.75)/27 for u <= 3 and 1/u beyond, written with
+    # min/max: u is evaluated twice and no branch divides by zero
+    um = ops.min(u, ops.const(3.0))
+    eps = (ops.pow(um - 4.5, 2.0) * (1.0 / 27.0) + 0.25) * ops.min(
+        ops.const(1.0), 3.0 / ops.max(u, ops.const(3.0)))
+    return {"N": N, "fx": fx, "fy": fy, "mz": mz, "eps": eps, "xi_x": xi_x, "xi_y": xi_y,
+            "phi": phi, "delta": delta, "r": r, "lever": lever, "cos_gamma": cg,
+            "sin_gamma": sg, "sign": s}
+
+
+def _arms(ops, w: dict, yaw):
+    """Directions and moment arms of one wheel's contact forces in the track frame.
+
+    Contact frame of the yawed wheel: t1 = (cos yaw, sin yaw, 0), t2 = (-sin yaw cos g,
+    cos yaw cos g, s sin g), n = (s sin yaw sin g, -s cos yaw sin g, cos g) (s = +1 left); the
+    force acts at p = (-l sin yaw, l cos yaw, -r). Returns the directions (t1, t2, n) and the
+    moments about the wheelset centre per unit force: p x t1 = (r sin yaw, -r cos yaw, -l),
+    p x t2 = w2 (cos yaw, sin yaw, 0), p x n = wn (cos yaw, sin yaw, 0) with
+    w2 = s l sin g + r cos g, wn = l cos g - s r sin g (the spin moment acts along n)."""
+    s, r, l, cg, sg = w["sign"], w["r"], w["lever"], w["cos_gamma"], w["sin_gamma"]
+    cy, sy = ops.cos(yaw), ops.sin(yaw)
+    t1 = (cy, sy, 0.0)
+    t2 = (-sy * cg, cy * cg, s * sg)
+    n = (s * sy * sg, -s * cy * sg, cg)
+    w2 = s * l * sg + r * cg
+    wn = l * cg - s * r * sg
+    return (t1, t2, n), ((r * sy, -r * cy, -l), (cy * w2, sy * w2, 0.0), (cy * wn, sy * wn, 0.0))
+
+
+def force_and_moment(ops, w: dict, yaw) -> tuple[tuple, tuple]:
+    """Track-frame force of one wheel's contact on the wheelset and its moment about the
+    wheelset centre (N, N m), from a :func:`wheel_contact` dict."""
+    (t1, t2, n), (m1, m2, mn) = _arms(ops, w, yaw)
+    Fx, Fy, Mz, N = w["eps"] * w["fx"], w["eps"] * w["fy"], w["eps"] * w["mz"], w["N"]
+    F = tuple(Fx * t1[k] + Fy * t2[k] + N * n[k] for k in range(3))
+    M = tuple(Fx * m1[k] + Fy * m2[k] + N * mn[k] + Mz * n[k] for k in range(3))
+    return F, M
+
+
+def wheelset_forces(ops, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
+                    reference_load_N: float) -> tuple[dict, dict]:
+    """Both wheels' :func:`wheel_contact` (left, right)."""
+    return (wheel_contact(ops, "L", st, geo, V, kappa, p, reference_load_N),
+            wheel_contact(ops, "R", st, geo, V, kappa, p, reference_load_N))
+
+
+def generalized_forces(ops, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
+                       reference_load_N: float) -> list:
+    """Generalized forces on the wheelset model's 7 coordinates: the non-rotating body's
+    (x, y, z, roll, pitch, yaw) as Tait-Bryan xyz angles (exudyn ``RotationRxyz``,
+    A = Rx(roll) Ry(pitch) Rz(yaw), pitch held at 0) and the spin angle about the axle.
+
+    Contact forces of both wheels, the gyroscopic moments of the spin and the centrifugal force
+    of the turning frame (module docstring); gravity and the axle load are separate loads. A
+    moment M about the centre splits into its component along the axle a = A e_y =
+    (-sin yaw, cos yaw cos roll, cos yaw sin roll), which drives the spin, and the rest
+    Mb = M - (M.a) a on the body, whose generalized forces are Mb.e_x (roll) and Mb.e3 (yaw,
+    e3 = Rx e_z = (0, -sin roll, cos roll); a.e3 = 0). The pitch entry is 0 (held).
+
+    Written as sum_wheels eps (c_x fx + c_y fy + c_z mz) + c_N N with cheap geometric
+    coefficients c: the same numbers as summing :func:`force_and_moment`, but every expensive
+    quantity appears once per coordinate (exudyn's symbolic trees have no shared
+    subexpressions: each use is evaluated again)."""
+    cr, sr = ops.cos(st.roll), ops.sin(st.roll)
+    cy, sy = ops.cos(st.yaw), ops.sin(st.yaw)
+    a = (-sy, cy * cr, cy * sr)
+    e3 = (0.0, -sr, cr)
+
+    def dot(u, v):
+        return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+    Q = [0.0] * 7
+    for w in wheelset_forces(ops, st, geo, V, kappa, p, reference_load_N):
+        (t1, t2, n), (m1, m2, mn) = _arms(ops, w, st.yaw)
+        # per unit of (fx, fy, mz, N): forces, axle moment, body roll and yaw moments
+        a1, a2, az, aN = dot(m1, a), dot(m2, a), dot(n, a), dot(mn, a)
+        coef = [
+            (t1[0], t2[0], 0.0, n[0]),
+            (t1[1], t2[1], 0.0, n[1]),
+            (0.0, t2[2], 0.0, n[2]),
+            (m1[0] + sy * a1, m2[0] + sy * a2, n[0] + sy * az, mn[0] + sy * aN),
+            None,
+            (dot(m1, e3), dot(m2, e3), dot(n, e3), dot(mn, e3)),
+            (a1, a2, az, aN),
+        ]
+        for k, c in enumerate(coef):
+            if c is None:
+                continue
+            creep = c[0] * w["fx"] + c[1] * w["fy"]
+            if k >= 3:
+                creep = creep + c[2] * w["mz"]
+            Q[k] = Q[k] + w["eps"] * creep + c[3] * w["N"]
+    Is = p.spin_inertia_kg_m2
+    Q[3] = Q[3] + Is * st.spin_t * (st.yaw_t + kappa * V)  # gyroscopic, about x
+    Q[5] = Q[5] - Is * st.spin_t * st.roll_t  # gyroscopic, about z
+    Q[1] = Q[1] - p.mass_kg * kappa * V * V  # centrifugal (turning frame)
+    return Q
