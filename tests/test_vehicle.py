@@ -87,7 +87,7 @@ def test_params_fields_are_plain_numbers_with_units():
     for f in fields(VehicleParams):
         assert f.type in (float, int), f.name  # real classes, not string annotations
         assert f.name.endswith(("_kg", "_m", "_kg_m2", "_N_per_m", "_N_s_per_m", "_m_per_s2",
-                                "_N_per_m1_5")), f.name
+                                "_N_per_m1_5", "_N_m_per_rad", "_m_per_s")), f.name
 
 
 # ---------------------------------------------------------------- static equilibrium

@@ -21,6 +21,27 @@ on level track.
 * Lateral bumpstops, one per bogie: between bogie frame and carbody at the bogie centre, at the
   height of the lower bellow plate (where the carbody's centre pivot meets the stops on the bogie
   frame); lateral force k_bs (|d| - clearance) beyond the clearance, 0 inside it.
+* Optional secondary components (:class:`VehicleParams`; each off by default, and then not built
+  at all, so that a car without them is the same model, bit for bit):
+    - anti-roll bar, one per bogie: an intrinsic ``RigidBodySpringDamper`` between bogie frame
+      and carbody with a rotational stiffness about x only: a pure roll couple
+      k_roll (phi_carbody - phi_frame), the x component of the relative rotation vector in the
+      mid-frame (the SE(3) logarithm the intrinsic formulation uses), and nothing else (no
+      bounce, pitch or yaw stiffness, no force, so no point of application to get wrong);
+    - traction rod (or centre pivot), one per bogie: longitudinal spring-damper between bogie
+      centre and carbody at ``traction_rod_height_m`` (intrinsic ``RigidBodySpringDamper``, x
+      stiffness and damping only);
+    - secondary dampers: vertical (two per bogie, at the bellow mid-height), lateral (one per
+      bogie, at the bogie centre) and yaw (two per bogie, longitudinal, at +-half their
+      spacing); each a (bi)linear damper in series with its mounting stiffness (a Maxwell
+      element, see :meth:`MetroCar._add_damper`), or a plain damper on a rigid mounting;
+    - emergency spring and vertical bumpstop, per bellow: the bellow and its internal stop in
+      parallel, the pair in series with the emergency spring (see :meth:`MetroCar._add_airspring`
+      and :func:`vehicle.suspension.airspring_series_force_N`); :meth:`bellow_crushing` stays
+      the bellow's own crushing, the quantity the pneumatic force law is written in.
+  The bellow's effective area as a function of its height belongs to the pneumatic bellow model
+  (force = gauge pressure x effective area, volume): the vehicle side only receives the force
+  law through :meth:`MetroCar.set_bellow_forces`.
 * Wheel-rail contact, per wheel: unilateral Hertz law Q = max(0, C_H delta^1.5 + c d(delta)/dt),
   Q = 0 when delta <= 0, vertical only, acting at a point fixed on the (non-spinning) wheelset
   body below the wheel centre, against the rail height prescribed for that wheel: the track's
@@ -88,9 +109,14 @@ Known limits of the running model (see also :class:`MetroCar`):
   differs by 0.02 %), but they are not physical;
 * on canted track the contact forces stay vertical and the guidance takes the in-plane lateral
   force at rail level: Q is the vertical load, not the load normal to the track plane;
-* no lateral damping (the paper's car has no hydraulic dampers): the carbody sway/roll mode at
-  ~1 Hz, excited by the transition, decays only through the primary vertical dampers and the
-  pneumatics.
+* no lateral damping by default (the paper's car has no hydraulic dampers): the carbody
+  sway/roll mode at ~1 Hz, excited by the transition, decays only through the primary vertical
+  dampers and the pneumatics (secondary dampers: see the optional components above);
+* the guidance prescribes every wheelset's arc length, so in a curve the bogie centres sit a
+  chord apart, shorter than the carbody's 10 m by 10^3 / (24 R^2) (4.2 mm at R = 100 m): stiff
+  traction rods take it as an internal longitudinal force (measured 11.4 kN per 10 MN/m rod at
+  R = 100 m, wheel loads shifted by up to 0.4 kN, roll unchanged), which real wheelsets,
+  free to roll forward, would not see. It falls with 1/R^2 (0.1 kN at R = 1000 m).
 """
 from __future__ import annotations
 
@@ -104,6 +130,9 @@ from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from .guidance import shared_sampler
 from .params import BELLOWS, WHEELS, VehicleParams  # noqa: F401 (BELLOWS, WHEELS re-exported)
+from .suspension import (airspring_series_bellow_crushing, airspring_series_force_N,
+                         arb_roll_stiffness_N_m_per_rad, bilinear_damper_force_N, maxwell_force_N,
+                         maxwell_step)
 from .track import TrackGeometry
 
 
@@ -113,6 +142,65 @@ EXUDYN_TESTED_MINOR = "1.13"
 
 _OUT = exu.OutputVariableType
 esym = exu.symbolic
+
+
+class _SymbolicOps:
+    """The operations of the :mod:`vehicle.suspension` force laws, on exudyn symbolic
+    expressions (the laws then compile into the connectors' C++ user functions)."""
+
+    @staticmethod
+    def where(condition, if_true, if_false):
+        real = esym.Real
+        return esym.IfThenElse(condition, *(v if isinstance(v, real) else real(float(v))
+                                            for v in (if_true, if_false)))
+
+    abs = staticmethod(esym.abs)
+    sign = staticmethod(esym.sign)
+    max = staticmethod(esym.max)
+    min = staticmethod(esym.min)
+
+
+_SYMBOLIC_OPS = _SymbolicOps()
+
+
+class _Damper:
+    """One secondary damper: its connector, law and (Maxwell element) internal state."""
+
+    def __init__(self, name: str, axis: int, c1: float, c2: float, v_b: float, k_s: float):
+        self.name, self.axis = name, axis
+        self.c1, self.c2, self.v_b, self.k_s = c1, c2, v_b, k_s
+        self.maxwell = math.isfinite(k_s)
+        self.connector = None
+        # Maxwell state at the start of the current step: damper elongation y [m] and rate
+        # [m/s] (Python values and the symbolic variables the force law reads), force [N]
+        self.y = self.ydot = self.force = 0.0
+        self.y_sym = self.ydot_sym = None
+
+
+def _check_components(p: VehicleParams) -> None:
+    """ValueError naming the field when an optional component's parameters are inconsistent."""
+    nonnegative = ("arb_roll_stiffness_N_m_per_rad", "arb_torsion_stiffness_N_m_per_rad",
+                   "traction_rod_stiffness_N_per_m", "traction_rod_damping_N_s_per_m",
+                   "vertical_bumpstop_clearance_m", "vertical_bumpstop_stiffness_N_per_m")
+    for kind in ("secondary_vertical", "secondary_lateral", "yaw"):
+        nonnegative += (f"{kind}_damping_N_s_per_m", f"{kind}_damper_blowoff_damping_N_s_per_m")
+    positive = ("emergency_spring_stiffness_N_per_m",) + tuple(
+        f"{kind}_damper_{what}" for kind in ("secondary_vertical", "secondary_lateral", "yaw")
+        for what in ("series_stiffness_N_per_m", "blowoff_velocity_m_per_s"))
+    for name in nonnegative:
+        value = getattr(p, name)
+        if not (value >= 0.0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be finite and >= 0, got {value}")
+    for name in positive:
+        value = getattr(p, name)
+        if not value > 0.0:
+            raise ValueError(f"{name} must be > 0 (inf: rigid / linear), got {value}")
+    if p.arb_roll_stiffness_N_m_per_rad > 0.0 and p.arb_torsion_stiffness_N_m_per_rad > 0.0:
+        raise ValueError("give the anti-roll bar either as arb_roll_stiffness_N_m_per_rad or as "
+                         "arb_torsion_stiffness_N_m_per_rad with its lever and link geometry, "
+                         "not both")
+    arb_roll_stiffness_N_m_per_rad(p.arb_torsion_stiffness_N_m_per_rad, p.arb_lever_arm_m,
+                                   p.arb_link_spacing_m)  # raises on a bad geometry
 
 
 def _four_floats(values) -> list[float]:
@@ -143,6 +231,8 @@ class MetroCar:
         newton_abs_tol: Newton absolute tolerance on the residual (force scale [N]).
         newton_rel_tol: Newton tolerance relative to the initial residual of the step.
         reuse_jacobian: reuse the Newton Jacobian across :meth:`advance` calls (see module doc).
+        carbody_load: build an external force and torque on the carbody, set with
+            :meth:`set_carbody_load` (zero until then); e.g. a static roll moment or wind.
     """
 
     #: the stored Newton Jacobian is renewed at the next macro-step once the track heading has
@@ -155,7 +245,7 @@ class MetroCar:
                  speed_m_per_s: float = 0.0, start_s_m: float | None = None,
                  spectral_radius: float = 0.8,
                  newton_abs_tol: float = 1e-4, newton_rel_tol: float = 1e-8,
-                 reuse_jacobian: bool = True):
+                 reuse_jacobian: bool = True, carbody_load: bool = False):
         if not step_s > 0.0:
             raise ValueError(f"step_s must be > 0, got {step_s}")
         if not math.isfinite(speed_m_per_s):
@@ -182,6 +272,11 @@ class MetroCar:
         self._bellow_height_m = p.airspring_upper_height_m - p.airspring_lower_height_m
         if self._bellow_height_m <= 0.0:
             raise ValueError("airspring_upper_height_m must exceed airspring_lower_height_m")
+        _check_components(p)
+        #: the airsprings include an emergency spring and/or a vertical bumpstop
+        self.airspring_in_series = (math.isfinite(p.emergency_spring_stiffness_N_per_m)
+                                    or p.vertical_bumpstop_stiffness_N_per_m > 0.0)
+        self._carbody_load = carbody_load
         self._init_run(track, float(speed_m_per_s), start_s_m)
 
         rail0 = self._rail_at(0.0)
@@ -193,6 +288,9 @@ class MetroCar:
         self._build(rail0)
         self.mbs.Assemble()
         self._init_solver(spectral_radius, newton_abs_tol, newton_rel_tol, reuse_jacobian)
+        if self._maxwell:
+            self._maxwell_t = 0.0  # time of the Maxwell states (last accepted step end)
+            self.mbs.SetPostStepUserFunction(self._post_step)
 
         self._bellow_t = None  # time of the cached bellow crushing
 
@@ -290,6 +388,25 @@ class MetroCar:
             self._add_bumpstop(ib)
         for j in range(8):
             self._add_contact(j, rail0[j])
+        # optional components (nothing is built when they are off: the same model, bit for bit)
+        self._arbs, self._traction_rods, self._dampers = [], [], []
+        k_arb = p.arb_roll_stiffness_N_m_per_rad + arb_roll_stiffness_N_m_per_rad(
+            p.arb_torsion_stiffness_N_m_per_rad, p.arb_lever_arm_m, p.arb_link_spacing_m)
+        for ib in range(2):
+            if k_arb > 0.0:
+                self._add_anti_roll_bar(ib, k_arb)
+            if p.traction_rod_stiffness_N_per_m > 0.0 or p.traction_rod_damping_N_s_per_m > 0.0:
+                self._add_traction_rod(ib)
+            self._add_dampers(ib)
+        self._maxwell = [d for d in self._dampers if d.maxwell]
+        if self._maxwell:
+            self._h_step = esym.Real("h_step", self.step_s)  # internal step size [s]
+            self._sym.append(self._h_step)
+            for d in self._maxwell:
+                self._set_maxwell_function(d)
+        if self._carbody_load:
+            self._load_force = mbs.CreateForce(itemNumber=self._carbody, show=False)
+            self._load_torque = mbs.CreateTorque(itemNumber=self._carbody, show=False)
 
     def _add_wheelset_guidance(self, iw: int) -> None:
         """Track guidance of wheelset ``iw`` (see module doc).
@@ -373,7 +490,14 @@ class MetroCar:
         axial force F(t, z) = F_n + dF/dt (t - t_n) + dF/dz (z - z_n) pushes the carbody up along
         J's z axis (the bellow axis: the mean of the two plates' normals), and the shear springs
         act on d_x, d_y. The connector force f enters the left-hand side like K u: it acts as
-        -f on the carbody (marker 1) and +f on the bogie, hence f = (k_s d_x, k_s d_y, -F)."""
+        -f on the carbody (marker 1) and +f on the bogie, hence f = (k_s d_x, k_s d_y, -F).
+
+        With an emergency spring and/or a vertical bumpstop (:attr:`airspring_in_series`), z is
+        the crushing of the whole airspring and the axial force is that of the bellow law in
+        parallel with the stop, in series with the emergency spring, solved in closed form by
+        :func:`~vehicle.suspension.airspring_series_force_N` (the massless node between bellow
+        and emergency spring needs no coordinate); the bellow law stays a law of the bellow's
+        own crushing z_b (:meth:`bellow_crushing`)."""
         p, mbs = self.params, self.mbs
         bogie = self._bogies[k // 2]
         lower, upper = self._bellow_plates(k)
@@ -394,15 +518,29 @@ class MetroCar:
             f = F + Fdot * (t - tn) + K * (z - z0)
             return [ks * displacement[0], ks * displacement[1], -f, zero, zero, zero]
 
+        F_static = self._F_static_N
+        k_e, k_stop = p.emergency_spring_stiffness_N_per_m, p.vertical_bumpstop_stiffness_N_per_m
+        clearance = p.vertical_bumpstop_clearance_m
+
+        def airspring_force(mbs, t, itemNumber, displacement, rotation, velocity,
+                            angularVelocity, stiffness, damping, rotJ0, rotJ1, offset):
+            z = h0 - displacement[2]  # crushing of bellow + emergency spring
+            f = airspring_series_force_N(z, F + Fdot * (t - tn) - K * z0, K, F_static, k_e,
+                                         k_stop, clearance, _SYMBOLIC_OPS)
+            return [ks * displacement[0], ks * displacement[1], -f, zero, zero, zero]
+
         co = mbs.CreateRigidBodySpringDamper(
             itemNumbers=[bogie, self._carbody], localPosition0=lower, localPosition1=upper,
             useIntrinsicFormulation=True, show=False)
-        fn = CreateSymbolicUserFunction(mbs, bellow_force, "springForceTorqueUserFunction", co)
+        law = airspring_force if self.airspring_in_series else bellow_force
+        fn = CreateSymbolicUserFunction(mbs, law, "springForceTorqueUserFunction", co)
         mbs.SetObjectParameter(co, "springForceTorqueUserFunction", fn)
         if k == 0:
-            self._bellows, self._bellow_vars = [], []
+            self._bellows, self._bellow_vars, self._bellow_law = [], [], []
+            self._t_set_s = 0.0
         self._bellows.append(co)
         self._bellow_vars.append((F, K, Fdot, z0))
+        self._bellow_law.append((self._F_static_N, 0.0, 0.0, 0.0))  # Python copy: F, K, Fdot, z0
         self._sym += [fn, h0, ks, zero]
 
     def _add_bumpstop(self, ib: int) -> None:
@@ -437,6 +575,152 @@ class MetroCar:
             self._bumpstops = []
         self._bumpstops.append(co)
         self._sym += [fn, clearance, k, zero]
+
+    def _between_bogie_and_carbody(self, ib: int, x: float, y: float, h: float) -> dict:
+        """Local positions, on bogie frame ``ib`` and on the carbody, of the point at (x, y)
+        from the bogie centre and height h above rail at static equilibrium (coincident markers:
+        a component's deflection is 0 there)."""
+        p = self.params
+        return dict(itemNumbers=[self._bogies[ib], self._carbody],
+                    localPosition0=[x, y, h - p.bogie_cog_height_m],
+                    localPosition1=[float(self.bogie_x_m[ib]) + x, y, h - p.carbody_cog_height_m],
+                    useIntrinsicFormulation=True, show=False)
+
+    def _add_anti_roll_bar(self, ib: int, k_roll: float) -> None:
+        """Anti-roll bar of bogie ``ib``: a roll couple k_roll (phi_carbody - phi_frame) between
+        bogie frame and carbody (see module doc). Intrinsic ``RigidBodySpringDamper`` with only
+        the rotational x stiffness: the torque is k_roll times the x component of the relative
+        rotation vector in the mid-frame; no force, no other stiffness. The couple is free
+        (no point of application); the markers sit at the bogie centre, lower-plate height."""
+        K = np.zeros((6, 6))
+        K[3, 3] = k_roll
+        co = self.mbs.CreateRigidBodySpringDamper(
+            stiffness=K, **self._between_bogie_and_carbody(ib, 0.0, 0.0,
+                                                           self.params.airspring_lower_height_m))
+        self._arbs.append(co)
+
+    def _add_traction_rod(self, ib: int) -> None:
+        """Traction rod (or centre pivot) of bogie ``ib``: longitudinal spring-damper between the
+        bogie centre and the carbody at ``traction_rod_height_m`` (intrinsic
+        ``RigidBodySpringDamper``, x stiffness and damping only: it carries the longitudinal
+        force and leaves the bogie free to yaw, roll and bounce)."""
+        p = self.params
+        K, D = np.zeros((6, 6)), np.zeros((6, 6))
+        K[0, 0], D[0, 0] = p.traction_rod_stiffness_N_per_m, p.traction_rod_damping_N_s_per_m
+        co = self.mbs.CreateRigidBodySpringDamper(
+            stiffness=K, damping=D,
+            **self._between_bogie_and_carbody(ib, 0.0, 0.0, p.traction_rod_height_m))
+        self._traction_rods.append(co)
+
+    def _add_dampers(self, ib: int) -> None:
+        """Secondary dampers of bogie ``ib`` that have damping: vertical (left, right; at the
+        bellow mid-height), lateral (bogie centre) and yaw (left, right; longitudinal)."""
+        p = self.params
+        side = "FR"[ib]
+        h_mid = 0.5 * (p.airspring_lower_height_m + p.airspring_upper_height_m)
+        kinds = (("secondary_vertical", 2, [(f"vertical_{side}{lr}", 0.0, y, h_mid) for lr, y in
+                                            (("L", 0.5), ("R", -0.5))]),
+                 ("secondary_lateral", 1, [(f"lateral_{side}", 0.0, 0.0,
+                                            p.secondary_lateral_damper_height_m)]),
+                 ("yaw", 0, [(f"yaw_{side}{lr}", 0.0, y, p.yaw_damper_height_m) for lr, y in
+                             (("L", 0.5), ("R", -0.5))]))
+        spacing = {"secondary_vertical": p.secondary_vertical_damper_lateral_spacing_m,
+                   "secondary_lateral": 0.0, "yaw": p.yaw_damper_lateral_spacing_m}
+        for kind, axis, places in kinds:
+            c1 = getattr(p, f"{kind}_damping_N_s_per_m")
+            if c1 == 0.0:
+                continue
+            for name, x, y, h in places:
+                d = _Damper(name, axis, c1, getattr(p, f"{kind}_damper_blowoff_damping_N_s_per_m"),
+                            getattr(p, f"{kind}_damper_blowoff_velocity_m_per_s"),
+                            getattr(p, f"{kind}_damper_series_stiffness_N_per_m"))
+                self._add_damper(d, ib, x, y * spacing[kind], h)
+
+    def _add_damper(self, d: _Damper, ib: int, x: float, y: float, h: float) -> None:
+        """Damper ``d`` between bogie frame ``ib`` and the carbody at (x, y, h) (see
+        :meth:`_between_bogie_and_carbody`), acting along the mid-frame axis ``d.axis`` (intrinsic
+        ``RigidBodySpringDamper``; force f = F along that axis, -F on the carbody).
+
+        Rigid mounting (series stiffness ``inf``): a linear damper is the connector's damping
+        matrix; a bilinear one a symbolic user function of the relative velocity.
+
+        Maxwell element (finite series stiffness k_s): the damper's elongation y is an internal
+        state. exudyn 1.13 has no connector that couples a generic first-order state (ODE1
+        coordinates, ``NodeGenericODE1``) to body motion (only the hydraulic actuator does), and
+        a massless intermediate body would make the mass matrix singular (a small mass, a stiff
+        spurious mode). So the state is integrated inside the force law, as an internal variable
+        (as in plasticity's return mapping): the symbolic user function gives the force at the
+        end of the step as a closed-form function of the deflection there, the step size and the
+        state (y, dy/dt) at the start of the step (trapezoidal rule, :func:`maxwell_force_N`).
+        The force law is thus an ordinary, deflection-dependent spring law for the implicit
+        solver: Newton sees its exact tangent k_s c / (c + k_s h/2) (numerical Jacobian), the
+        generalized-alpha step stays implicit in y, and no Python runs inside Newton. After every
+        accepted step a PostStep function (:meth:`_post_step`) commits the state from the
+        converged deflection (in C++ exudyn would do the same with ODE1 coordinates: its
+        implicit solver integrates them with the trapezoidal rule too).
+        """
+        K = np.zeros((6, 6))
+        D = np.zeros((6, 6))
+        rigid_linear = not d.maxwell and math.isinf(d.v_b)
+        if rigid_linear:
+            D[d.axis, d.axis] = d.c1
+        d.connector = self.mbs.CreateRigidBodySpringDamper(
+            stiffness=K, damping=D, **self._between_bogie_and_carbody(ib, x, y, h))
+        self._dampers.append(d)
+        if rigid_linear or d.maxwell:
+            return  # the Maxwell function needs the step-size variable: _set_maxwell_function
+        zero = esym.Real(0.0)
+        axis, c1, c2, vb = d.axis, d.c1, d.c2, d.v_b
+
+        def damper_force(mbs, t, itemNumber, displacement, rotation, velocity, angularVelocity,
+                         stiffness, damping, rotJ0, rotJ1, offset):
+            f = [zero] * 6
+            f[axis] = bilinear_damper_force_N(velocity[axis], c1, c2, vb, _SYMBOLIC_OPS)
+            return f
+
+        self._set_user_function(d.connector, damper_force, zero)
+
+    def _set_maxwell_function(self, d: _Damper) -> None:
+        """Symbolic force law of Maxwell damper ``d`` (see :meth:`_add_damper`)."""
+        zero = esym.Real(0.0)
+        d.y_sym = esym.Real(f"y_{d.name}", 0.0)  # damper elongation at the step start [m]
+        d.ydot_sym = esym.Real(f"ydot_{d.name}", 0.0)  # its rate [m/s]
+        axis, y, ydot, h = d.axis, d.y_sym, d.ydot_sym, self._h_step
+        k_s, c1, c2, vb = d.k_s, d.c1, d.c2, d.v_b
+
+        def maxwell_force(mbs, t, itemNumber, displacement, rotation, velocity, angularVelocity,
+                          stiffness, damping, rotJ0, rotJ1, offset):
+            f = [zero] * 6
+            f[axis] = maxwell_force_N(displacement[axis], y, ydot, h, k_s, c1, c2, vb,
+                                      _SYMBOLIC_OPS)
+            return f
+
+        self._set_user_function(d.connector, maxwell_force, zero, y, ydot)
+
+    def _set_user_function(self, co, function, *keep) -> None:
+        """``function`` as the symbolic springForceTorqueUserFunction of connector ``co``."""
+        fn = CreateSymbolicUserFunction(self.mbs, function, "springForceTorqueUserFunction", co)
+        self.mbs.SetObjectParameter(co, "springForceTorqueUserFunction", fn)
+        self._sym += [fn, *keep]
+
+    def _post_step(self, mbs, t: float) -> bool:
+        """PostStep user function (only with Maxwell dampers): after an accepted step ending at
+        t, advance each Maxwell element's state (y, dy/dt) to t from the converged deflection,
+        with the very law the connector used (:func:`maxwell_step`). Idempotent: exudyn also
+        calls it at the start of every SolveSteps, for a state already committed."""
+        t0 = self._maxwell_t
+        if not t > t0:
+            return True
+        h = t - t0
+        get = mbs.GetObjectOutput
+        for d in self._maxwell:
+            deflection = float(get(d.connector, _OUT.DisplacementLocal)[d.axis])
+            d.force, d.y, d.ydot = maxwell_step(deflection, d.y, d.ydot, h, d.k_s, d.c1, d.c2,
+                                                d.v_b)
+            d.y_sym.SetValue(d.y)
+            d.ydot_sym.SetValue(d.ydot)
+        self._maxwell_t = t
+        return True
 
     def _add_contact(self, j: int, rail0_m: float) -> None:
         """Wheel ``WHEELS[j]``: unilateral Hertz contact against its prescribed rail height.
@@ -517,6 +801,8 @@ class MetroCar:
         when the stored Jacobian is kept (see :meth:`_keep_jacobian`)."""
         if self._jac_may_skip:
             self._keep_jacobian()
+        if self._maxwell:
+            self._h_step.SetValue(t - mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep))
         state = self._track_at(t) if self._guided else None
         if self._guided:
             self._set_guidance(state)
@@ -642,6 +928,16 @@ class MetroCar:
             w0, w1 = w_frames[k // 2]
             z.append(h0 - d2)
             zdot.append(-(v2 - (w0 * d1 - w1 * d0)))
+        self._z_total = np.array(z)
+        if self.airspring_in_series:  # the bellow's own share (see _add_airspring)
+            p, t = self.params, self._t
+            out = [airspring_series_bellow_crushing(
+                zk, zdk, F + Fdot * (t - self._t_set_s) - K * z0, K, Fdot, self._F_static_N,
+                p.emergency_spring_stiffness_N_per_m, p.vertical_bumpstop_stiffness_N_per_m,
+                p.vertical_bumpstop_clearance_m)
+                for zk, zdk, (F, K, Fdot, z0) in zip(z, zdot, self._bellow_law)]
+            z = [o[1] for o in out]
+            zdot = [o[2] for o in out]
         self._z, self._zdot = np.array(z), np.array(zdot)
         self._bellow_t = self._t
 
@@ -694,6 +990,10 @@ class MetroCar:
             Fdv.SetValue(Fdk)
             z0v.SetValue(zk)
         self._t_set.SetValue(self._t)
+        self._bellow_law = list(zip(F, dF, Fdot, self._z.tolist()))
+        self._t_set_s = self._t
+        if self.airspring_in_series:
+            self._bellow_t = None  # the new law splits the same total crushing anew
 
     def advance(self, t_end_s: float) -> None:
         """Integrate from :attr:`t_s` to ``t_end_s`` [s] in equal steps <= ``step_s``."""
@@ -763,3 +1063,50 @@ class MetroCar:
         get = self.mbs.GetObjectOutput
         # the connector force acts as -f on the carbody (see _add_bumpstop)
         return np.array([-get(co, _OUT.ForceLocal)[1] for co in self._bumpstops])
+
+    # ================================================================== optional components
+    def airspring_crushing_m(self) -> np.ndarray:
+        """(4,) crushing [m] of each whole airspring (bellow + emergency spring), :data:`BELLOWS`
+        order, positive in compression, 0 at static equilibrium: z = h0 - d_z as in
+        :meth:`bellow_crushing`, which without an emergency spring or vertical bumpstop is the
+        same number and with them the bellow's own share."""
+        self._bellow_state()
+        return self._z_total.copy()
+
+    def anti_roll_bar_moments_N_m(self) -> np.ndarray:
+        """(2,) roll moments [N m] of the anti-roll bars on the carbody, front and rear bogie,
+        about the x axis of the mid-frame between bogie frame and carbody: -k_roll (phi_carbody
+        - phi_frame), negative when the carbody rolls left side up relative to the frame.
+        Empty without anti-roll bars."""
+        get = self.mbs.GetObjectOutput
+        return np.array([-get(co, _OUT.TorqueLocal)[0] for co in self._arbs])
+
+    def traction_rod_forces_N(self) -> np.ndarray:
+        """(2,) longitudinal forces [N] of the traction rods on the carbody, front and rear bogie,
+        along the x axis of the mid-frame (negative when the carbody is ahead of its position
+        relative to the bogie). Empty without traction rods."""
+        get = self.mbs.GetObjectOutput
+        return np.array([-get(co, _OUT.ForceLocal)[0] for co in self._traction_rods])
+
+    def damper_forces_N(self) -> dict[str, float]:
+        """Force [N] of every secondary damper, by name (``vertical_FL``, ``lateral_F``,
+        ``yaw_RR``, ...; F/R bogie, L/R side): the force on the bogie frame along the damper's
+        axis (the carbody gets the opposite), positive when it resists the carbody moving along
+        +x (yaw), +y (lateral) or +z (vertical) relative to the frame. Maxwell elements: the
+        force at the end of the last accepted step."""
+        get = self.mbs.GetObjectOutput
+        return {d.name: d.force if d.maxwell else float(get(d.connector, _OUT.ForceLocal)[d.axis])
+                for d in self._dampers}
+
+    def set_carbody_load(self, force_N=(0.0, 0.0, 0.0), torque_N_m=(0.0, 0.0, 0.0)) -> None:
+        """External load on the carbody for the following :meth:`advance` (needs
+        ``carbody_load=True``): a force [N] at its centre of gravity and a torque [N m], both in
+        global axes (x forward at the start, y left, z up; torque right-hand: +x rolls the left
+        side up)."""
+        if not self._carbody_load:
+            raise ValueError("set_carbody_load needs MetroCar(..., carbody_load=True)")
+        for load, value in ((self._load_force, force_N), (self._load_torque, torque_N_m)):
+            v = np.asarray(value, dtype=float).reshape(3)
+            if not np.all(np.isfinite(v)):
+                raise ValueError(f"non-finite carbody load {v}")
+            self.mbs.SetLoadParameter(load, "loadVector", v.tolist())

@@ -13,7 +13,27 @@ Scaling rules used below (Manchester -> metro):
 
 Only ``float``/``int`` fields (real classes in ``dataclasses.fields(...)[i].type``, no string
 annotations), so a generic loader can fill the dataclass by introspection.
+
+Optional secondary components (anti-roll bar, secondary dampers, traction rod, emergency spring,
+vertical bumpstop; see the last sections of :class:`VehicleParams`) are all off by default: the
+paper's car has none of them, and with them off the model is the same, bit for bit. Their
+typical values are collected, with sources, in :func:`metro_car_arb_dampers`. An ``inf``
+stiffness means a rigid connection (no series spring), an ``inf`` blow-off velocity a linear
+damper; 0 damping or stiffness means the component is absent.
+
+Textbook sources for the typical ranges quoted below:
+  [I] S. Iwnicki (ed.), Handbook of Railway Vehicle Dynamics, CRC Press, 2006 (2nd ed. 2019):
+      chapter "Suspension components" (air springs with emergency springs, hydraulic dampers
+      with series stiffness and blow-off, anti-roll bars, traction rods);
+  [KS] K. Knothe, S. Stichel, Rail Vehicle Dynamics, Springer, 2017: secondary suspensions of
+      passenger vehicles, roll coefficient and anti-roll bars;
+  [M] S. Iwnicki, The Manchester Benchmarks for Rail Vehicle Simulation, Vehicle System
+      Dynamics 30 (1998) 295-313: secondary vertical damper 20 kN s/m per side on a 32 t body.
+Values not taken from these are reasoned from this car's masses and geometry; they are typical
+orders of magnitude, not the data of one particular vehicle.
 """
+import dataclasses
+import math
 from dataclasses import dataclass
 
 #: Bellows (airsprings): front/rear bogie, left/right in the running direction.
@@ -110,3 +130,122 @@ class VehicleParams:
 
     # --- environment ---
     gravity_m_per_s2: float = 9.81  # standard gravity, rounded as in most vehicle codes
+
+    # ================================================================ optional components
+    # All off by default (the paper's car has none). Typical values: metro_car_arb_dampers().
+
+    # --- anti-roll bar, one per bogie, between bogie frame and carbody ---
+    # Roll couple k (phi_carbody - phi_frame). Give either the equivalent roll stiffness, or the
+    # torsion bar with its geometry: k = k_t (link spacing / lever arm)^2 (not both).
+    # Air-sprung passenger cars: of order 1 MN m/rad per bogie [I, KS]; it sets the roll
+    # coefficient, indispensable with a two-point (cross-connected) air suspension.
+    arb_roll_stiffness_N_m_per_rad: float = 0.0
+    # Torsion-bar stiffness G pi d^4 / (32 L): e.g. d = 50 mm, L = 1.8 m, G = 80 GPa: 27 kN m/rad.
+    arb_torsion_stiffness_N_m_per_rad: float = 0.0
+    # Lever (crank) arm from the bar's axis to the link joint, typically 0.25-0.4 m.
+    arb_lever_arm_m: float = 0.0
+    # Lateral distance between the two vertical links, ~ the airspring spacing (1.8-2.2 m).
+    arb_link_spacing_m: float = 0.0
+
+    # --- secondary vertical dampers: two per bogie, at +-spacing/2, vertical ---
+    # Each a (bi)linear damper in series with its mounting (rubber end bushes), see
+    # vehicle/suspension.py. Damping per damper: 10-40 kN s/m on air-sprung passenger
+    # vehicles [I]; Manchester benchmark 20 kN s/m on a 32 t body [M].
+    secondary_vertical_damping_N_s_per_m: float = 0.0
+    # Blow-off (relief valve opening) velocity v_b; beyond it the slope is the blow-off
+    # damping. Typical knees 0.05-0.2 m/s, slopes beyond 10-50 % of the first [I]. inf: linear.
+    secondary_vertical_damper_blowoff_velocity_m_per_s: float = math.inf
+    secondary_vertical_damper_blowoff_damping_N_s_per_m: float = 0.0
+    # Series (mounting) stiffness: end bushes and oil compressibility, of order 1-10 MN/m [I].
+    # inf: rigid mounting (a plain damper).
+    secondary_vertical_damper_series_stiffness_N_per_m: float = math.inf
+    # Lateral spacing of the two vertical dampers: next to the airsprings (here 2.0 m).
+    secondary_vertical_damper_lateral_spacing_m: float = 2.0
+
+    # --- secondary lateral damper: one per bogie, at the bogie centre, lateral ---
+    # 15-40 kN s/m on passenger vehicles [I]; same law and parameters as the vertical ones.
+    secondary_lateral_damping_N_s_per_m: float = 0.0
+    secondary_lateral_damper_blowoff_velocity_m_per_s: float = math.inf
+    secondary_lateral_damper_blowoff_damping_N_s_per_m: float = 0.0
+    secondary_lateral_damper_series_stiffness_N_per_m: float = math.inf
+    # Height above rail: between the frame's side beams and the carbody underframe, ~0.9 m.
+    secondary_lateral_damper_height_m: float = 0.9
+
+    # --- yaw dampers: two per bogie, longitudinal, at +-spacing/2 ---
+    # Against bogie hunting at speed: high-speed cars use a few hundred kN s/m with blow-off
+    # at ~0.01-0.02 m/s and 5-10 MN/m series stiffness [I, KS]; metro cars (<= 100 km/h)
+    # usually have none (e.g. doi:10.1007/s40864-016-0045-x).
+    yaw_damping_N_s_per_m: float = 0.0
+    yaw_damper_blowoff_velocity_m_per_s: float = math.inf
+    yaw_damper_blowoff_damping_N_s_per_m: float = 0.0
+    yaw_damper_series_stiffness_N_per_m: float = math.inf
+    # Mounted outside the frame's side beams: 2.5-2.8 m apart.
+    yaw_damper_lateral_spacing_m: float = 2.6
+    # Height above rail, near the bogie frame's side beam top.
+    yaw_damper_height_m: float = 0.8
+
+    # --- traction rod (or centre pivot), one per bogie: longitudinal, at the bogie centre ---
+    # Longitudinal stiffness of the rod's rubber bushes, 5-20 MN/m [I]. 0: none (the bellows'
+    # shear then holds the carbody longitudinally, as in the paper's car).
+    traction_rod_stiffness_N_per_m: float = 0.0
+    # Damping of the bushes; rubber loss factor ~0.1 at the ~5 Hz carbody-on-rods mode gives
+    # c = 0.1 k / omega ~ 30 kN s/m for 10 MN/m.
+    traction_rod_damping_N_s_per_m: float = 0.0
+    # Height above rail of the rod: low traction rods (0.4-0.6 m) limit the load transfer
+    # between wheelsets under traction and braking.
+    traction_rod_height_m: float = 0.5
+
+    # --- emergency spring and vertical bumpstop, per bellow ---
+    # Emergency (auxiliary) rubber spring in series with the bellow: it carries the load always
+    # and alone, through the bumpstop, when the bellow is deflated or bottoms. Laminated rubber
+    # emergency springs: ~1-3 MN/m vertical, several times the bellow's stiffness [I]. inf: none
+    # (the bellow sits on a rigid seat, as in the paper's car).
+    emergency_spring_stiffness_N_per_m: float = math.inf
+    # Internal bumpstop of the bellow, in parallel with it: engages when the bellow's own
+    # crushing exceeds the clearance (measured from the static height). Typical free travel
+    # 30-60 mm [I]; the stop then rests on the emergency spring.
+    vertical_bumpstop_clearance_m: float = 0.04
+    # Stop stiffness (rubber pad on the emergency spring's top plate): stiffer than the
+    # emergency spring, ~10 MN/m. 0: no stop.
+    vertical_bumpstop_stiffness_N_per_m: float = 0.0
+
+
+def metro_car_arb_dampers() -> VehicleParams:
+    """The paper's metro car (the :class:`VehicleParams` defaults) with the secondary components
+    an air-sprung metro car usually has: an anti-roll bar per bogie, vertical and lateral
+    dampers, a traction rod per bogie, and an emergency spring with a bumpstop under each
+    bellow. No yaw dampers (usual below ~100 km/h). Typical values, sources [I], [KS], [M] in
+    the module doc; where a value is reasoned from this car, the reasoning:
+
+    * anti-roll bar 1.0 MN m/rad per bogie ("of order 1 MN m/rad" [I, KS]); e.g. a 50 mm steel
+      bar 1.8 m long (27 kN m/rad) with 0.3 m levers and links 2.0 m apart gives 1.2 MN m/rad.
+      Quasi-static carbody roll at 1 m/s^2 unbalanced lateral acceleration (hand calculation of
+      tests/test_vehicle_curve.py with the bar added): 0.020 rad without the bar, 0.0095 rad
+      with it (bellows 243 kN/m each), 0.012 rad with the bar alone (two-point suspension,
+      no bellow roll stiffness): roll coefficients ~0.1-0.2, the usual range;
+    * vertical dampers 10 kN s/m each: the Manchester benchmark's 20 kN s/m [M] scaled by the
+      carbody mass (17 t / 32 t); damping ratio of the bounce mode ~0.1 on 243 kN/m bellows.
+      Blow-off at 0.1 m/s to 30 % of the slope; 2 MN/m series stiffness (end bushes) [I];
+    * lateral damper 20 kN s/m, one per bogie (15-40 kN s/m [I]): sway damping ratio ~0.2 on
+      the bellows' 4 x 120 kN/m shear; blow-off at 0.1 m/s to 30 %; 2 MN/m series stiffness;
+    * traction rods 10 MN/m (5-20 MN/m [I]), 30 kN s/m (rubber loss factor ~0.1 at the 5.5 Hz
+      carbody-on-rods mode), 0.5 m above rail;
+    * emergency springs 2 MN/m (1-3 MN/m [I]), stops after 40 mm of bellow crushing
+      (30-60 mm [I]), 10 MN/m.
+    """
+    return dataclasses.replace(
+        VehicleParams(),
+        arb_roll_stiffness_N_m_per_rad=1.0e6,
+        secondary_vertical_damping_N_s_per_m=10.0e3,
+        secondary_vertical_damper_blowoff_velocity_m_per_s=0.1,
+        secondary_vertical_damper_blowoff_damping_N_s_per_m=3.0e3,
+        secondary_vertical_damper_series_stiffness_N_per_m=2.0e6,
+        secondary_lateral_damping_N_s_per_m=20.0e3,
+        secondary_lateral_damper_blowoff_velocity_m_per_s=0.1,
+        secondary_lateral_damper_blowoff_damping_N_s_per_m=6.0e3,
+        secondary_lateral_damper_series_stiffness_N_per_m=2.0e6,
+        traction_rod_stiffness_N_per_m=10.0e6,
+        traction_rod_damping_N_s_per_m=30.0e3,
+        emergency_spring_stiffness_N_per_m=2.0e6,
+        vertical_bumpstop_stiffness_N_per_m=10.0e6,
+    )
