@@ -15,6 +15,7 @@ Every error names the file, the key path and what was expected (:class:`Scenario
 """
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
@@ -28,11 +29,11 @@ from pneumatics.valves import DifferentialPressureValve, LevellingValve
 from vehicle.params import WHEELS, VehicleParams
 
 from .checks import parse_checks
-from .experiments import (CAR_KINDS, KINDS, RIG_KINDS, RIG_TESTS, CarCircuit, CurveTest, QuasiStaticTest, RampTest,
-                          RigCircuit, Scenario, SineTest, SolverSettings, StiffnessTest, TwistTest, VerifySettings)
+from .experiments import (CAR_KINDS, KINDS, RIG_KINDS, RIG_TESTS, CarCircuit, CurveTest, RampTest, RigCircuit, Scenario,
+                          SineTest, SolverSettings, TwistTest, VerifySettings)
 from .master import COUPLINGS
-from .schema import ScenarioError, build, check_keys, coerce, k_values, require
-from .yaml_input import parse_yaml, read_yaml
+from .schema import MAX_SAMPLES, ScenarioError, build, check_keys, coerce, describe, k_values, require
+from .yaml_input import MAX_BYTES, parse_yaml, read_yaml
 
 __all__ = ["load_scenario", "apply_overrides", "load_yaml", "CAR_KINDS", "RIG_KINDS", "KINDS"]
 
@@ -59,52 +60,63 @@ def apply_overrides(data: Dict[str, Any], overrides: Sequence[str], file) -> Dic
                     raise ScenarioError(file, parts[: i + 1], "--set cannot descend into a value that is not a mapping")
                 node[p] = {}
             node = node[p]
-        node[parts[-1]] = parse_yaml(value, file, ["--set", key.strip()])
+        node[parts[-1]] = parse_yaml(value, file, [f"--set {key.strip()}"])
     return data
 
 
+#: Most integration steps one run may take (macro-steps of a car run; the rig's integrator
+#: steps, bounded below by its largest step): 1e7 steps are hours of computing. The shipped
+#: scenarios take at most 120 000.
+MAX_STEPS = 10_000_000
+#: Highest rail lift of a twist test [m]: three times the largest EN 14363 test height. The limit
+#: twist times its base, (20/2a* + 2) per mille x 2a*, is 20 mm + 2 per mille x 2a*: 60 mm for the
+#: longest bogie-centre distance the rule covers (20 m), plus half the bogie twist's 7 per mille x
+#: 2a+ (~10 mm); 3 x 70 mm ~ 0.2 m. Beyond it a "track" lifts a wheel off any plausible test bench
+#: (100 per mille over a 10 m base: 1 m).
+MAX_RAIL_LIFT_M = 0.2
+
+
 def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequence[float]] = None) -> Scenario:
-    """Read and validate a scenario file; raises :class:`ScenarioError` before anything runs."""
+    """Read and validate a scenario file; raises :class:`ScenarioError` before anything runs.
+
+    Every check runs here, in the calling process, before any simulation: types, finite numbers
+    in their ranges (:mod:`cosim.schema`), lists non-empty and without duplicates, and the rules
+    between fields (amplitude vs bellow stroke, twist height vs a plausible lift, steps vs duration,
+    windows within the run, the circuit assembled and started once)."""
     path = Path(path)
     data, text = load_yaml(path)
     if not isinstance(data, dict):
-        raise ScenarioError(path, [], f"expected a mapping at the top level, got {type(data).__name__}")
+        got = "an empty document" if data is None else describe(data)
+        raise ScenarioError(path, [], f"expected a mapping at the top level (kind: ..., k_W_per_K: ...), got {got}")
     if isinstance(data.get("vehicle"), str) and any(o.strip().startswith("vehicle.") for o in overrides):
         data = {**data, "vehicle": {"file": data["vehicle"]}}  # a parameter file, then single fields on top
     data = apply_overrides(data, overrides, path)
     kind = require(data, "kind", path, [], str)
     if kind not in KINDS:
         raise ScenarioError(path, ["kind"], f"unknown kind {kind!r} (expected one of {', '.join(KINDS)})")
-    common = dict(file=path, kind=kind, name=str(data.get("name", path.stem)),
-                  description=str(data.get("description", "")),
-                  k_W_per_K=k_values(list(k_override), path, ["--k"]) if k_override else k_values(require(data, "k_W_per_K", path, []), path, ["k_W_per_K"]),
-                  content_sha256=hashlib.sha256(text.encode()).hexdigest(), overrides=tuple(overrides), raw=data,
-                  files_sha256=_files_read(path, data))
     if kind in RIG_KINDS:
         check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", "test"), path, [])
+    else:
+        experiment = "twist" if kind == "twist" else "curve"
+        check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", experiment, "solver",
+                          "verify", "checks"), path, [])
+    ks = (k_values(list(k_override), path, ["--k"]) if k_override
+          else k_values(require(data, "k_W_per_K", path, []), path, ["k_W_per_K"]))
+    common = dict(file=path, kind=kind, name=_name(data, path), description=_description(data, path),
+                  k_W_per_K=ks, content_sha256=hashlib.sha256(text.encode()).hexdigest(),
+                  overrides=tuple(overrides), raw=data)
+    if kind in RIG_KINDS:
         rig = _rig_circuit(require(data, "circuit", path, [], dict), path)
         test = build(RIG_TESTS[kind], data.get("test"), path, ["test"])
-        if isinstance(test, RampTest):
-            for i, c in enumerate(test.configurations):
-                if c not in ("bellow_tank", "bellow_only"):
-                    raise ScenarioError(path, ["test", f"configurations[{i}]"], "expected bellow_tank or bellow_only")
-        stroke = rig.bellow.V0_m3 / rig.bellow.dV_dz_m2
-        if isinstance(test, (RampTest, SineTest, StiffnessTest, QuasiStaticTest)) and not abs(test.amplitude_m) < stroke:
-            raise ScenarioError(path, ["test", "amplitude_m"], f"|amplitude| must be below V0/(dV/dz) = {stroke:.4g} m, "
-                                                               f"where the bellow volume vanishes; got {test.amplitude_m}")
-        if isinstance(test, StiffnessTest) and any(f <= 0 for f in test.frequencies_Hz):
-            raise ScenarioError(path, ["test", "frequencies_Hz"], "frequencies must be > 0 Hz")
-        return Scenario(**common, rig=rig, test=test)
+        _check_rig_test(test, rig, path)
+        return Scenario(**common, files_sha256=_files_read(path, data), rig=rig, test=test)
 
-    experiment = "twist" if kind == "twist" else "curve"
-    check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", experiment, "solver", "verify",
-                      "checks"), path, [])
     vehicle = _vehicle(data.get("vehicle"), path)
-    _check_car_builds(vehicle, data.get("vehicle"), path)
+    car = _check_car_builds(vehicle, data.get("vehicle"), path)
     circuit = _car_circuit(require(data, "circuit", path, [], dict), path)
     solver = build(SolverSettings, data.get("solver"), path, ["solver"])
     if solver.coupling not in COUPLINGS:
-        raise ScenarioError(path, ["solver", "coupling"], f"expected one of {COUPLINGS}, got {solver.coupling!r}")
+        raise ScenarioError(path, ["solver", "coupling"], f"expected one of {', '.join(COUPLINGS)}, got {solver.coupling!r}")
     if kind == "twist":
         tests = {"twist": _twist(data.get("twist"), vehicle, path)}
         duration = tests["twist"].duration_s
@@ -117,36 +129,109 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         raise ScenarioError(path, [experiment, "valve_settings"], "an explicit circuit (circuit.components) has no "
                                                                   "valves switch: give a single setting")
     _check_steps(solver, duration, path)
+    _check_initial_state(circuit, car, ks, valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
-    if not verify.tolerance > 0:
-        raise ScenarioError(path, ["verify", "tolerance"], f"expected a relative error > 0, got {verify.tolerance}")
-    if verify.levels < 2:
-        raise ScenarioError(path, ["verify", "levels"], f"Richardson extrapolation needs at least 2 halvings, got {verify.levels}")
-    checks = parse_checks(data.get("checks", []), kind, path, common["k_W_per_K"], valve_settings)
-    return Scenario(**common, vehicle=vehicle, circuit=circuit, solver=solver, verify=verify, checks=checks, **tests)
+    checks = parse_checks(data.get("checks", []), kind, path, ks, valve_settings)
+    return Scenario(**common, files_sha256=_files_read(path, data), vehicle=vehicle, circuit=circuit, solver=solver,
+                    verify=verify, checks=checks, **tests)
+
+
+def _name(data: Mapping, path: Path) -> str:
+    """``name`` (default: the file name): it names the default output folder ``results/<name>``,
+    so it must be usable as one folder name."""
+    if "name" not in data:
+        return path.stem
+    value = data["name"]
+    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise ScenarioError(path, ["name"], f"expected a string, got {describe(value)}")
+    name = str(value)
+    if (not name.strip() or name in (".", "..") or any(c in name for c in "/\\") or any(ord(c) < 32 for c in name)
+            or len(name) > 100):
+        raise ScenarioError(path, ["name"], f"expected a name usable as a folder name (no / or \\, no control "
+                                            f"characters, at most 100 characters), got {name!r}")
+    return name
+
+
+def _description(data: Mapping, path: Path) -> str:
+    value = data.get("description", "")
+    if value is None:
+        return ""
+    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise ScenarioError(path, ["description"], f"expected a string, got {describe(value)}")
+    return str(value)
+
+
+def _check_rig_test(test, rig: RigCircuit, path) -> None:
+    """Rules between the fields of a rig test and its circuit."""
+    if isinstance(test, RampTest):
+        for i, c in enumerate(test.configurations):
+            if c not in ("bellow_tank", "bellow_only"):
+                raise ScenarioError(path, ["test", f"configurations[{i}]"], f"expected bellow_tank or bellow_only, "
+                                                                            f"got {c!r}")
+    stroke = rig.bellow.V0_m3 / rig.bellow.dV_dz_m2
+    if not abs(test.amplitude_m) < stroke:
+        raise ScenarioError(path, ["test", "amplitude_m"], f"|amplitude| must be below V0/(dV/dz) = {stroke:.4g} m, "
+                                                           f"where the bellow volume vanishes; got {test.amplitude_m}")
+    if isinstance(test, RampTest):
+        if test.ramp_s > test.duration_s:
+            raise ScenarioError(path, ["test", "ramp_s"], f"the ramp must end within the run (duration_s = "
+                                                          f"{test.duration_s:g} s), got {test.ramp_s:g} s")
+        steps = test.duration_s / (test.ramp_s / 50.0)      # the integrator's largest step: ramp_s / 50
+        if steps > MAX_STEPS:
+            raise ScenarioError(path, ["test", "ramp_s"], f"the integrator steps at most ramp_s/50: a {test.ramp_s:g} s "
+                                                          f"ramp in a {test.duration_s:g} s run takes {steps:.3g} steps "
+                                                          f"(at most {MAX_STEPS:.0e})")
+    if isinstance(test, SineTest):
+        periods = test.duration_s * test.frequency_Hz
+        if periods < 2:
+            raise ScenarioError(path, ["test", "duration_s"], f"expected at least 2 periods of the sine (the summary "
+                                                              f"compares periods), got {periods:.3g} "
+                                                              f"({test.duration_s:g} s at {test.frequency_Hz:g} Hz)")
+        samples = periods * test.samples_per_period + 1
+        if samples > MAX_SAMPLES:
+            raise ScenarioError(path, ["test", "duration_s"], f"the run would store {samples:.3g} samples (duration_s x "
+                                                              f"frequency_Hz x samples_per_period); at most {MAX_SAMPLES:.0e}")
+        if periods * 20 > MAX_STEPS:                        # the integrator's largest step: a period / 20
+            raise ScenarioError(path, ["test", "duration_s"], f"{periods:.3g} periods take {periods * 20:.3g} integration "
+                                                              f"steps (20 a period); at most {MAX_STEPS:.0e}")
 
 
 def _files_read(path: Path, data: Mapping) -> Tuple[Tuple[str, str], ...]:
-    """(path relative to the scenario file, sha256) of the scenario and the vehicle parameter file."""
+    """(path relative to the scenario file, sha256) of the scenario and the vehicle parameter file
+    (called once both have been read and validated)."""
     vehicle = data.get("vehicle")
     vehicle = vehicle.get("file") if isinstance(vehicle, dict) else vehicle
     files = [path] + ([path.parent / vehicle] if isinstance(vehicle, str) else [])
     return tuple((str(f.relative_to(path.parent)) if f.is_relative_to(path.parent) else str(f),
-                  hashlib.sha256(f.read_bytes()).hexdigest()) for f in files if f.is_file())
+                  hashlib.sha256(f.read_bytes()).hexdigest())
+                 for f in files if f.is_file() and f.stat().st_size <= MAX_BYTES)
 
 
 def _check_steps(solver: SolverSettings, duration_s: float, path) -> None:
     """The run and its output interval must be whole numbers of macro-steps (nothing is rounded
-    silently), and the multibody step no longer than the macro-step."""
+    silently), the multibody step no longer than the macro-step, and the run of a
+    bounded size (:data:`MAX_STEPS` macro-steps, :data:`~cosim.schema.MAX_SAMPLES` output rows)."""
     H = solver.macro_step_s
+    if H > duration_s * (1 + 1e-9):
+        raise ScenarioError(path, ["solver", "macro_step_s"], f"the macro-step ({H:g} s) is longer than the run "
+                                                              f"({duration_s:g} s)")
     for key, value in (("output_interval_s", solver.output_interval_s), ("duration", duration_s)):
         n = value / H
         if abs(n - round(n)) > 1e-6 * max(n, 1.0) or round(n) < 1:
             where = ["solver", key] if key != "duration" else ["solver", "macro_step_s"]
-            raise ScenarioError(path, where, f"the {key.replace('_s', '')} ({value:g} s) must be a whole number of "
-                                             f"macro-steps ({H:g} s)")
+            raise ScenarioError(path, where, f"the {key.replace('_s', '').replace('_', ' ')} ({value:g} s) must be a "
+                                             f"whole number of macro-steps ({H:g} s)")
+    if duration_s / H > MAX_STEPS:
+        raise ScenarioError(path, ["solver", "macro_step_s"], f"the run ({duration_s:g} s) takes {duration_s / H:.3g} "
+                                                              f"macro-steps of {H:g} s; at most {MAX_STEPS:.0e}")
+    if duration_s / solver.output_interval_s > MAX_SAMPLES:
+        raise ScenarioError(path, ["solver", "output_interval_s"], f"the run ({duration_s:g} s) would store "
+                                                                   f"{duration_s / solver.output_interval_s:.3g} rows; "
+                                                                   f"at most {MAX_SAMPLES:.0e}")
+    # (the pneumatic step only bounds the circuit's RK4 sub-steps within a macro-step: it may exceed it)
     if solver.mechanics_step_s > H * (1 + 1e-9):
-        raise ScenarioError(path, ["solver", "mechanics_step_s"], f"must not exceed the macro-step ({H:g} s)")
+        raise ScenarioError(path, ["solver", "mechanics_step_s"], f"must not exceed the macro-step ({H:g} s), got "
+                                                                  f"{solver.mechanics_step_s:g} s")
     if solver.jobs < 1:
         raise ScenarioError(path, ["solver", "jobs"], f"expected at least 1 process, got {solver.jobs}")
 
@@ -159,8 +244,6 @@ def _twist(data, vehicle: VehicleParams, path) -> TwistTest:
     if twist.window_s is not None and twist.window_s > twist.hold_s:
         raise ScenarioError(path, ["twist", "window_s"], f"the final window must lie within the hold "
                                                          f"(hold_s = {twist.hold_s:g} s), got {twist.window_s:g} s")
-    if not twist.settle_drift > 0:
-        raise ScenarioError(path, ["twist", "settle_drift"], f"must be > 0 (a drift of ΔQ/Q0), got {twist.settle_drift}")
     _valve_settings(twist.valve_settings, path, ["twist", "valve_settings"])
     if twist.bogie_twist_per_mille is not None and twist.bogie_base_m is None:
         raise ScenarioError(path, ["twist", "bogie_twist_per_mille"], "a bogie twist needs its base: set bogie_base_m "
@@ -178,6 +261,22 @@ def _twist(data, vehicle: VehicleParams, path) -> TwistTest:
             raise ScenarioError(path, ["twist", "raised_wheels"], "a bogie twist (bogie_base_m) twists one side of the "
                                                                   "front bogie: expected [1R, 2R] or [1L, 2L], got "
                                                                   f"{list(twist.raised_wheels)}")
+    # Plausible test height. The twist is bounded by MAX_TWIST_PER_MILLE (cosim.schema); the lift
+    # of the highest rail, twist x base (+ half the bogie twist's height), by MAX_RAIL_LIFT_M.
+    # (The bellow stroke is deliberately not the bound: a bellow driven beyond its stroke is a
+    # legitimate study of divergence, which the runs diagnose.)
+    lift = twist.height_m + 0.5 * twist.bogie_height_m
+    if not lift <= MAX_RAIL_LIFT_M:
+        if twist.bogie_base_m is not None and twist.height_m <= MAX_RAIL_LIFT_M:   # the bogie twist tips it over
+            key = "bogie_twist_per_mille" if twist.bogie_twist_per_mille is not None else "bogie_base_m"
+        else:
+            key = "twist_per_mille" if twist.twist_per_mille is not None else "base_m"
+        raise ScenarioError(path, ["twist", key], f"the rails rise by {lift * 1e3:.0f} mm (twist {twist.twist * 1e3:g} "
+                                                  f"per mille x base {twist.base_m:g} m"
+                                                  + (f" + half the bogie twist's {twist.bogie_height_m * 1e3:.0f} mm"
+                                                     if twist.bogie_base_m is not None else "")
+                                                  + f"): expected at most {MAX_RAIL_LIFT_M * 1e3:.0f} mm, three times "
+                                                  f"the largest EN 14363 test height")
     return twist
 
 
@@ -194,11 +293,6 @@ def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
     curve = build(CurveTest, data, path, ["curve"])
     if curve.direction not in (1, -1):
         raise ScenarioError(path, ["curve", "direction"], f"expected 1 (left) or -1 (right), got {curve.direction}")
-    if not curve.speed_m_per_s > 0:
-        raise ScenarioError(path, ["curve", "speed_m_per_s"], f"must be > 0 m/s, got {curve.speed_m_per_s}")
-    for name in ("straight_m", "transition_m", "radius_m", "arc_m"):
-        if not getattr(curve, name) > 0:
-            raise ScenarioError(path, ["curve", name], f"must be > 0 m, got {getattr(curve, name)}")
     car_length = vehicle.bogie_centre_distance_m + vehicle.wheelbase_m
     if curve.straight_m < car_length:
         raise ScenarioError(path, ["curve", "straight_m"], f"the straight must hold the whole car ({car_length:g} m "
@@ -210,7 +304,11 @@ def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
     on_track = (curve.straight_m + curve.transition_m + curve.arc_m - car_length) / curve.speed_m_per_s
     if curve.duration_s > on_track:
         raise ScenarioError(path, ["curve", "duration_s"], f"the front wheelset leaves the track at t = {on_track:.3g} s; "
-                                                           f"lengthen arc_m or shorten duration_s")
+                                                           f"lengthen arc_m or shorten duration_s (got {curve.duration_s:g} s)")
+    try:
+        curve.track()
+    except ValueError as exc:
+        raise ScenarioError(path, ["curve"], f"the track cannot be built: {exc}") from None
     return curve
 
 
@@ -220,8 +318,22 @@ def _chambers_and_pipe(data: Mapping, file):
     P = ["circuit"]
     bellow = build(Bellow, data.get("bellow"), file, P + ["bellow"], p0_Pa=None, T0_K=None)
     tank = _optional(Tank, data, "tank", file, P, p0_Pa=None, T0_K=None)
-    pipe = build(Pipe, data.get("pipe"), file, P + ["pipe"], a="", b="")
+    pipe = _pipe(data.get("pipe"), file, P + ["pipe"])
     return bellow, tank, pipe
+
+
+def _pipe(data, file, where) -> Pipe:
+    pipe = build(Pipe, data, file, where, a="", b="")
+    _check_pipe(pipe, file, where)
+    return pipe
+
+
+def _check_pipe(pipe: Pipe, file, where) -> None:
+    """The total loss coefficient lambda L/d + zeta of eq. (5) divides the quasi-steady flow: it
+    must be > 0 (each term is >= 0 by the field rules); reported at ``zeta``, the key one sets."""
+    if not pipe.loss_coefficient > 0:
+        raise ScenarioError(file, [*where, "zeta"], "the pressure-loss coefficient lambda L/d + zeta must be > 0 "
+                                                    f"(friction_factor = {pipe.friction_factor:g}, zeta = {pipe.zeta:g})")
 
 
 def _optional(cls, data: Mapping, key: str, file, prefix, **fixed):
@@ -236,7 +348,7 @@ def _rig_circuit(data: Mapping, file) -> RigCircuit:
     bellow, tank, pipe = _chambers_and_pipe(data, file)
     p0 = coerce(require(data, "p0_Pa", file, ["circuit"]), float, file, ["circuit", "p0_Pa"])
     if not p0 > 0:
-        raise ScenarioError(file, ["circuit", "p0_Pa"], f"absolute pressure must be > 0 Pa, got {p0}")
+        raise ScenarioError(file, ["circuit", "p0_Pa"], f"expected an absolute pressure > 0 Pa, got {p0:g}")
     rig = RigCircuit(bellow, tank, pipe, p0)
     _compile_check(rig.components(tank is not None), file, ["circuit"], {"bellow": "bellow", "tank": "tank", "pipe": "pipe"})
     return rig
@@ -247,24 +359,40 @@ LAYOUTS = ("four_point", "two_point")
 
 def _explicit_components(data: Mapping, file) -> Dict[str, object]:
     """``circuit.components``: name -> {type: bellow|tank|supply|pipe|orifice|levelling_valve|...,
-    parameters...}; links name the nodes they join (``a``/``b``, ``bellow``, ``supply`` ...)."""
+    parameters...}; links name the nodes they join (``a``/``b``, ``bellow``, ``supply`` ...).
+    The car's four bellows are put first, in the order FL, FR, RL, RR (the order the runners
+    expect), whatever the order they are written in; the other components keep theirs."""
     comps = require(data, "components", file, ["circuit"], dict)
     out = {}
     for name, spec in comps.items():
         path = ["circuit", "components", str(name)]
         if not isinstance(spec, dict):
-            raise ScenarioError(file, path, f"expected a mapping with a 'type', got {type(spec).__name__}")
+            raise ScenarioError(file, path, f"expected a mapping with a 'type', got {describe(spec)}")
         kind = require(spec, "type", file, path, str)
         if kind not in COMPONENT_TYPES:
             raise ScenarioError(file, path + ["type"], f"unknown component type {kind!r} "
                                                        f"(expected one of {', '.join(sorted(COMPONENT_TYPES))})")
         out[str(name)] = build(COMPONENT_TYPES[kind], {k: v for k, v in spec.items() if k != "type"}, file, path)
+        if isinstance(out[str(name)], Pipe):
+            _check_pipe(out[str(name)], file, path)
     _compile_check(out, file, ["circuit", "components"], {})
-    missing = [b for b in BELLOWS if b not in out]
+    missing = [b for b in BELLOWS if not isinstance(out.get(b), Bellow)]
     if missing:
         raise ScenarioError(file, ["circuit", "components"], f"the car needs bellows named {', '.join(BELLOWS)}; "
                                                              f"missing {', '.join(missing)}")
-    return out
+    extra = [n for n, c in out.items() if isinstance(c, Bellow) and n not in BELLOWS]
+    if extra:
+        raise ScenarioError(file, ["circuit", "components", extra[0]], f"the car has four bellows, "
+                                                                       f"{', '.join(BELLOWS)}: another bellow has no "
+                                                                       f"place on it (a chamber: type tank)")
+    return {**{b: out[b] for b in BELLOWS}, **{n: c for n, c in out.items() if n not in BELLOWS}}
+
+
+#: component names of a layout circuit (pneumatics.layouts) -> its key under ``circuit``
+_LAYOUT_KEYS = {**{b: "bellow" for b in BELLOWS}, **{f"tank_{b}": "tank" for b in BELLOWS},
+                **{f"pipe_{b}": "pipe" for b in BELLOWS}, **{f"lv_{b}": "levelling_valve" for b in BELLOWS},
+                "lv_F": "levelling_valve", "lv_R": "levelling_valve", "dpv_F": "differential_valve",
+                "dpv_R": "differential_valve", "supply": "supply", "cross_F": "cross_pipe", "cross_R": "cross_pipe"}
 
 
 def _car_circuit(data: Mapping, file) -> CarCircuit:
@@ -277,7 +405,7 @@ def _car_circuit(data: Mapping, file) -> CarCircuit:
     check_keys(data, keys, file, ["circuit"])
     layout = coerce(data.get("layout", "four_point"), str, file, ["circuit", "layout"])
     if layout not in LAYOUTS:
-        raise ScenarioError(file, ["circuit", "layout"], f"expected one of {LAYOUTS}, got {layout!r}")
+        raise ScenarioError(file, ["circuit", "layout"], f"expected one of {', '.join(LAYOUTS)}, got {layout!r}")
     P = ["circuit"]
     bellow, tank, pipe = _chambers_and_pipe(data, file)
     valves = coerce(data.get("valves", False), bool, file, P + ["valves"])
@@ -285,15 +413,13 @@ def _car_circuit(data: Mapping, file) -> CarCircuit:
                bellow="", supply="supply", sensed=())
     dpv = _optional(DifferentialPressureValve, data, "differential_valve", file, P, a="", b="")
     supply = build(Supply, data.get("supply"), file, P + ["supply"])
-    cross = build(Pipe, data["cross_pipe"], file, P + ["cross_pipe"], a="", b="") if data.get("cross_pipe") is not None else None
+    cross = _pipe(data["cross_pipe"], file, P + ["cross_pipe"]) if data.get("cross_pipe") is not None else None
     if layout == "two_point" and cross is None:
         raise ScenarioError(file, P + ["cross_pipe"], "a two_point layout needs a cross_pipe between the bellows of a bogie")
     spec = CarCircuit(layout, bellow, tank, pipe, valves, lv, dpv, supply, cross)
-    names = {**{b: "bellow" for b in BELLOWS}, **{f"tank_{b}": "tank" for b in BELLOWS},
-             **{f"pipe_{b}": "pipe" for b in BELLOWS}, **{f"lv_{b}": "levelling_valve" for b in BELLOWS},
-             "lv_F": "levelling_valve", "lv_R": "levelling_valve", "dpv_F": "differential_valve",
-             "dpv_R": "differential_valve", "supply": "supply", "cross_F": "cross_pipe", "cross_R": "cross_pipe"}
-    _compile_check(spec.components(), file, P, names)
+    # both valve settings: the runs may switch the valves (twist/curve valve_settings)
+    for setting in (valves, not valves):
+        _compile_check(dataclasses.replace(spec, valves=setting).components(), file, P, _LAYOUT_KEYS)
     return spec
 
 
@@ -302,34 +428,79 @@ def _compile_check(components, file, prefix, yaml_key_of) -> None:
     try:
         Circuit(components)
     except CircuitError as exc:
-        name, *rest = exc.path
-        raise ScenarioError(file, [*prefix, yaml_key_of.get(name, name), *rest], exc.reason) from None
+        raise _circuit_error(exc, file, prefix, yaml_key_of) from None
+
+
+def _circuit_error(exc: CircuitError, file, prefix, yaml_key_of) -> ScenarioError:
+    name, *rest = exc.path or ("",)
+    return ScenarioError(file, [*prefix, yaml_key_of.get(name, name), *rest], exc.reason)
+
+
+def _check_initial_state(circuit: CarCircuit, car, ks, valve_settings, path) -> None:
+    """Start the circuit once as the runners will (cars/runs: cosim.car_runs.build_cosimulation):
+    bellow pressures that carry the car's static load, tanks at their bellow's, every k value; an
+    initial state that cannot be set (a chamber with no initial pressure, an isothermal chamber
+    not at the atmosphere's temperature) fails here, not in a worker process."""
+    from .car_runs import static_pressures
+    explicit = circuit.explicit is not None
+    prefix, keys = (["circuit", "components"], {}) if explicit else (["circuit"], _LAYOUT_KEYS)
+    for setting in dict.fromkeys(valve_settings):
+        components = circuit.components() if explicit else dataclasses.replace(circuit, valves=setting).components()
+        try:
+            c = Circuit(components, k_W_per_K=list(ks))
+            c.initial_state(static_pressures(components, car.static_bellow_forces_N(), c.atmosphere.p_Pa))
+        except CircuitError as exc:
+            if exc.reason == "initial pressure is not set":
+                exc.reason += " (give it p0_Pa, or join it to a bellow by a pipe or an orifice: it starts at the bellow's)"
+            raise _circuit_error(exc, path, prefix, keys) from None
+
+
+def _param_file(value, file, where) -> Path:
+    """The vehicle parameter file ``value`` (relative to the scenario) if it can be read; else an
+    error naming the scenario and the key that names the file."""
+    vpath = Path(file).parent / value
+    if not vpath.exists():
+        raise ScenarioError(file, where, f"the vehicle parameter file {str(vpath)!r} does not exist")
+    if not vpath.is_file():
+        raise ScenarioError(file, where, f"the vehicle parameter file {str(vpath)!r} is not a file")
+    return vpath
+
+
+def _read_params(vpath: Path) -> Dict[str, Any]:
+    """The mapping of a vehicle parameter file; errors in it name that file."""
+    data, _ = load_yaml(vpath)
+    if not isinstance(data, dict):
+        got = "an empty document" if data is None else describe(data)
+        raise ScenarioError(vpath, [], f"expected a mapping of vehicle parameters (field: value), got {got}")
+    return data
 
 
 def _vehicle(value, file) -> VehicleParams:
     if value is None:
         return VehicleParams()
     if isinstance(value, str):
-        vpath = (Path(file).parent / value)
-        data, _ = load_yaml(vpath)
-        return build(VehicleParams, data, vpath, [])
+        vpath = _param_file(value, file, ["vehicle"])
+        return build(VehicleParams, _read_params(vpath), vpath, [])
     if isinstance(value, dict):
         base = value.get("file")
-        defaults = {}
+        defaults: Dict[str, Any] = {}
         if base is not None:
-            vpath = Path(file).parent / coerce(base, str, file, ["vehicle", "file"])
-            defaults, _ = load_yaml(vpath)
-        merged = {**(defaults or {}), **{k: v for k, v in value.items() if k != "file"}}
+            vpath = _param_file(coerce(base, str, file, ["vehicle", "file"]), file, ["vehicle", "file"])
+            defaults = _read_params(vpath)
+            build(VehicleParams, defaults, vpath, [])            # the file's own errors name the file
+        merged = {**defaults, **{k: v for k, v in value.items() if k != "file"}}
         return build(VehicleParams, merged, file, ["vehicle"])
-    raise ScenarioError(file, ["vehicle"], f"expected a parameter file path or a mapping, got {type(value).__name__}")
+    raise ScenarioError(file, ["vehicle"], f"expected a parameter file path or a mapping, got {describe(value)}")
 
 
-def _check_car_builds(vehicle: VehicleParams, source, file) -> None:
+def _check_car_builds(vehicle: VehicleParams, source, file):
     """Build the car once (~0.1 s): constraints between parameters (e.g. the bellow's upper plate
-    above its lower one) fail here, as bad input, not later inside a worker process."""
+    above its lower one) fail here, as bad input, not later inside a worker process. Returns the
+    car (its static bellow forces start the circuit, :func:`_check_initial_state`)."""
     from vehicle.car import MetroCar  # exudyn: only for car scenarios
     try:
-        MetroCar(vehicle)
-    except ValueError as exc:
+        return MetroCar(vehicle)
+    except Exception as exc:                    # noqa: BLE001 -- whatever the parameters break is bad input
         where = Path(file).parent / source if isinstance(source, str) else file
-        raise ScenarioError(where, ["vehicle"] if where == file else [], f"inconsistent car parameters: {exc}") from None
+        reason = str(exc) if isinstance(exc, ValueError) else f"{type(exc).__name__}: {exc}"
+        raise ScenarioError(where, ["vehicle"] if where == file else [], f"inconsistent car parameters: {reason}") from None

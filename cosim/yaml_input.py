@@ -1,66 +1,127 @@
 """Reading scenario YAML defensively: a stricter ``yaml.SafeLoader``.
 
 A scenario is a few kilobytes of hand-written YAML. Anything else is refused, each within a
-fraction of a second and with a :class:`~cosim.schema.ScenarioError` naming the file:
+fraction of a second and with a :class:`~cosim.schema.ScenarioError` naming the file (and, where
+there is one, the key path):
 
 * files over :data:`MAX_BYTES`, binary or non-UTF-8 content;
-* duplicate keys in a mapping (PyYAML silently keeps the last one);
-* nesting deeper than :data:`MAX_DEPTH` (PyYAML's recursive constructor would overflow the
-  stack) and documents that expand to more than :data:`MAX_NODES` values (an "alias bomb"
-  expands exponentially): both are checked on the composed node graph, before anything is
-  constructed.
+* duplicate keys in a mapping (PyYAML silently keeps the last one), reported at their key path;
+* nesting deeper than :data:`MAX_DEPTH`: refused by the scanner itself, at the bracket or
+  indentation that goes too deep (PyYAML's scanner slows down quadratically with nested flow
+  brackets, and its composer and constructor recurse: 5000 ``[`` took 10 s and ended in a
+  ``RecursionError``);
+* more than :data:`MAX_NODES` values: counted while composing (each alias counts as a value), so a
+  long list stops after that many, and counted again on the composed graph with every alias
+  expanded (an "alias bomb" expands exponentially), before anything is constructed;
+* values PyYAML cannot construct (``2024-13-45`` as a date, ``!!int abc``, unknown tags).
 """
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Sequence, Tuple
+from typing import Any, List, Sequence, Tuple
 
 import yaml
 
 from .schema import ScenarioError
 
-#: Largest scenario or parameter file read [bytes]; the shipped ones are 1-3 kB.
-MAX_BYTES = 1 << 20
+#: Largest scenario or parameter file read [bytes]; the shipped ones are 1-4 kB.
+MAX_BYTES = 256 * 1024
 #: Deepest nesting of mappings and lists (the shipped scenarios use 4).
 MAX_DEPTH = 32
-#: Most values (scalars, lists, mappings) a document may expand to, aliases counted as often as
-#: they are referenced (the shipped scenarios have about 150).
-MAX_NODES = 100_000
+#: Most values (scalars, lists, mappings) a document may hold, aliases counted as often as they
+#: are referenced (the shipped scenarios have about 150, the vehicle parameter file 130). Reading
+#: takes ~30 us a value: the limit keeps any document well within a second.
+MAX_NODES = 10_000
+
+
+class _Refused(yaml.YAMLError):
+    """Raised from inside the loader: what was refused and where (a PyYAML mark)."""
+
+    def __init__(self, reason: str, mark):
+        self.reason, self.mark = reason, mark
+        super().__init__(reason)
 
 
 class StrictLoader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` that refuses duplicate keys."""
+    """``yaml.SafeLoader`` that refuses duplicate keys, deep nesting and too many values."""
 
+    def __init__(self, stream):
+        super().__init__(stream)
+        self._nodes = 0
+
+    # --- scanner: nesting depth, checked where it grows (flow brackets, block indentation)
+    def _deeper(self, extra: int) -> None:
+        if self.flow_level + len(self.indents) + extra > MAX_DEPTH:
+            raise _Refused(f"nesting deeper than {MAX_DEPTH} levels: not a scenario", self.get_mark())
+
+    def fetch_flow_collection_start(self, TokenClass):
+        self._deeper(1)
+        super().fetch_flow_collection_start(TokenClass)
+
+    def add_indent(self, column):
+        added = super().add_indent(column)
+        if added:
+            self._deeper(0)
+        return added
+
+    # --- composer: number of values
+    def compose_node(self, parent, index):
+        self._nodes += 1
+        if self._nodes > MAX_NODES:
+            raise _Refused(f"more than {MAX_NODES} values: not a scenario", self.peek_event().start_mark)
+        return super().compose_node(parent, index)
+
+    # --- constructor: duplicate keys that the node check cannot see (e.g. 1 and 1.0)
     def construct_mapping(self, node, deep=False):
         seen = {}
         for key_node, _ in node.value:
             key = self.construct_object(key_node, deep=deep)
-            if key in seen:
+            try:
+                first = seen.get(key)
+            except TypeError:                     # unhashable: super() says so, with its mark
+                continue
+            if first is not None:
                 raise yaml.constructor.ConstructorError(
-                    None, None, f"duplicate key {key!r} (first at line {seen[key] + 1})", key_node.start_mark)
+                    None, None, f"duplicate key {key!r} (first at line {first + 1})", key_node.start_mark)
             seen[key] = key_node.start_mark.line
         return super().construct_mapping(node, deep=deep)
 
 
+def _key_text(node) -> str:
+    return str(node.value) if isinstance(node, yaml.ScalarNode) else f"<{node.tag.rsplit(':', 1)[-1]}>"
+
+
 def _check_graph(root, file, where: Sequence[str]) -> None:
-    """Nesting depth and expanded size of the composed node graph. Aliases make it a DAG whose
-    expansion can be exponential; its size is counted with one visit per distinct node (memo),
-    and the recursion is bounded by the depth check."""
+    """Duplicate keys (at their key path) and the expanded size of the composed node graph.
+    Aliases make it a DAG whose expansion can be exponential; its size is counted with one visit
+    per distinct node (memo). The depth is bounded by the scanner (:data:`MAX_DEPTH`)."""
     sizes = {}
 
-    def size(node, depth: int) -> int:
-        if depth > MAX_DEPTH:
-            raise ScenarioError(file, where, f"nesting deeper than {MAX_DEPTH} levels "
-                                             f"(line {node.start_mark.line + 1}): not a scenario")
+    def size(node, path: List[str]) -> int:
         if id(node) not in sizes:
-            children = ([n for pair in node.value for n in pair] if isinstance(node, yaml.MappingNode) else
-                        node.value if isinstance(node, yaml.SequenceNode) else [])
-            sizes[id(node)] = 1 + sum(size(c, depth + 1) for c in children)
+            if isinstance(node, yaml.MappingNode):
+                seen = {}
+                for key_node, _ in node.value:
+                    if isinstance(key_node, yaml.ScalarNode):
+                        ident = (key_node.tag, key_node.value)
+                        if ident in seen:
+                            raise ScenarioError(file, [*where, *path, key_node.value],
+                                                f"duplicate key (first at line {seen[ident] + 1}, again at line "
+                                                f"{key_node.start_mark.line + 1}): each key at most once")
+                        seen[ident] = key_node.start_mark.line
+                total = 1 + sum(size(k, path) + size(v, [*path, _key_text(k)]) for k, v in node.value)
+            elif isinstance(node, yaml.SequenceNode):
+                def item(i):
+                    return [*path[:-1], f"{path[-1]}[{i}]"] if path else [f"[{i}]"]
+                total = 1 + sum(size(v, item(i)) for i, v in enumerate(node.value))
+            else:
+                total = 1
+            sizes[id(node)] = total
         return sizes[id(node)]
 
-    if size(root, 1) > MAX_NODES:
+    if size(root, []) > MAX_NODES:
         raise ScenarioError(file, where, f"the document expands to more than {MAX_NODES} values (aliases *name "
-                                         f"repeating aliases): not a scenario")
+                                         f"repeating anchors &name): not a scenario")
 
 
 def parse_yaml(text: str, file, where: Sequence[str] = ()) -> Any:
@@ -75,10 +136,16 @@ def parse_yaml(text: str, file, where: Sequence[str] = ()) -> Any:
             return loader.construct_document(root)
         finally:
             loader.dispose()
+    except ScenarioError:
+        raise
+    except _Refused as exc:
+        raise ScenarioError(file, where, f"{exc.reason} (line {exc.mark.line + 1})") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         raise ScenarioError(file, where, f"not valid YAML{at}: {getattr(exc, 'problem', None) or exc}") from None
+    except (ValueError, TypeError, OverflowError) as exc:   # e.g. 2024-13-45 read as a date, !!int abc
+        raise ScenarioError(file, where, f"not valid YAML: a value cannot be read ({exc})") from None
     except RecursionError:
         raise ScenarioError(file, where, "nesting too deep: not a scenario") from None
 
@@ -87,13 +154,27 @@ def read_yaml(path: Path) -> Tuple[Any, str]:
     """(data, text) of a YAML file, refusing what cannot be a scenario (module doc)."""
     path = Path(path)
     try:
+        if not path.exists():
+            raise ScenarioError(path, [], "no such file")
+        if path.is_dir():
+            raise ScenarioError(path, [], "this is a folder, not a scenario file")
+        if not path.is_file():                     # a FIFO would block, a device never end
+            raise ScenarioError(path, [], "not a regular file")
         size = path.stat().st_size
         if size > MAX_BYTES:
-            raise ScenarioError(path, [], f"the file is {size / 1e6:.1f} MB; a scenario is at most "
+            raise ScenarioError(path, [], f"the file is {size / 1024:.0f} kB; a scenario is at most "
                                           f"{MAX_BYTES // 1024} kB of YAML")
-        raw = path.read_bytes()
+        with path.open("rb") as f:
+            raw = f.read(MAX_BYTES + 1)            # the size may have changed since
+        if len(raw) > MAX_BYTES:
+            raise ScenarioError(path, [], f"more than {MAX_BYTES // 1024} kB: a scenario is at most "
+                                          f"{MAX_BYTES // 1024} kB of YAML")
+    except ScenarioError:
+        raise
     except OSError as exc:
-        raise ScenarioError(path, [], f"cannot read the file ({exc.strerror})") from None
+        raise ScenarioError(path, [], f"cannot read the file ({exc.strerror or exc})") from None
+    except ValueError as exc:                      # e.g. an embedded NUL byte in the path
+        raise ScenarioError(path, [], f"not a usable file name ({exc})") from None
     if b"\0" in raw:
         raise ScenarioError(path, [], "binary content (NUL bytes): expected a YAML text file")
     try:
