@@ -1,11 +1,11 @@
-"""Command line: ``pneumorail run | check | verify | compare | sweep``.
+"""Command line: ``pneumorail run | check | validate | verify | compare | sweep``.
 
 Exit codes: 0 success (for ``check``: every limit holds; for ``verify``: every estimated
 discretisation error within the scenario's ``verify.tolerance``; for ``sweep``: every case
 finished without diverging, and with ``--check`` every limit holds in every case), 1 a limit is
 violated, an error estimate exceeds its tolerance, a run diverged or a sweep case failed, 2 bad
-input (the message names the file, the key path and what was expected), 130 a sweep interrupted
-(Ctrl-C; rerun the same command to resume).
+input (the message names the file, the key path and what was expected), 130 / 143 interrupted
+by SIGINT (Ctrl-C) / SIGTERM (what was computed is kept; a sweep resumes when rerun).
 """
 from __future__ import annotations
 
@@ -18,10 +18,28 @@ from pathlib import Path
 from typing import List, Optional, Sequence
 
 from .executors import ExecutorUnavailable
-from .results import Progress
+from .results import Progress, k_label
 from .schema import ScenarioError
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def _version() -> str:
+    from .results import versions
+    return versions().get("pneumorail", "unknown")
+
+
+def _argument(name: str):
+    """An argparse type from :mod:`cosim.compare`'s parser ``name``, which raises ValueError
+    (argparse then exits 2 with the message); imported when used (matplotlib is slow to load)."""
+    def convert(text: str):
+        from . import compare
+        try:
+            return getattr(compare, name)(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    convert.__name__ = name
+    return convert
 
 
 def _k_list(text: str) -> List[float]:
@@ -38,9 +56,33 @@ def _k_list(text: str) -> List[float]:
     return out
 
 
+EPILOG = """\
+exit codes:
+  0    success (check: every limit holds; verify: every error estimate within its tolerance;
+       validate: every file is valid; sweep: every case finished)
+  1    a limit is violated, a result is outside the model's validity (check), an error estimate
+       exceeds its tolerance, a run diverged, a sweep case failed, a result could not be written
+  2    bad input: the message names the file, the key path and what was expected
+  130  interrupted by Ctrl-C (SIGINT), 143 by SIGTERM: what was computed is kept
+
+examples:
+  pneumorail run scenarios/twist_dqq.yaml                       # results/twist_dqq/
+  pneumorail run scenarios/curve_entry.yaml --k 0,inf --set curve.speed_m_per_s=12
+  pneumorail check scenarios/twist_dqq.yaml --quiet             # CI gate; check.json, check.xml (JUnit)
+  pneumorail validate scenarios/*.yaml                          # every check, no simulation
+  pneumorail verify scenarios/curve_entry.yaml --k 0,inf        # halve every step twice: error estimates
+  pneumorail sweep scenarios/curve_entry.yaml --grid curve.speed_m_per_s=8,10,12 --k 0,inf
+  pneumorail compare results/twist_dqq results/twist_dqq_1a2b3c4d --wheels 1L,3R
+
+every scenario key: docs/scenario_keys.md; the models: docs/models.md
+"""
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="pneumorail", description=__doc__.split("\n")[0])
-    sub = p.add_subparsers(dest="command", required=True)
+    p = argparse.ArgumentParser(prog="pneumorail", description=__doc__.split("\n")[0], epilog=EPILOG,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     def scenario_options(parser, out_default: str) -> None:
         """Options every command that runs one scenario shares."""
         parser.add_argument("--out", type=Path, default=None, help=f"output folder (default: {out_default})")
@@ -56,6 +98,11 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("scenario", type=Path, help="scenario YAML file")
         scenario_options(s, "results/<scenario name>, plus a hash of --set/--k if given")
         s.add_argument("--overwrite", action="store_true", help="replace a previous run in the output folder")
+    a = sub.add_parser("validate", help="check scenario or sweep files completely without running them (exit 0 or 2)")
+    a.add_argument("scenarios", type=Path, nargs="+", help="scenario or sweep YAML files")
+    a.add_argument("--k", type=_k_list, default=None, help="override the k values [W/K], e.g. 0,10,inf")
+    a.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scenario value, e.g. --set twist.hold_s=10 (repeatable)")
     v = sub.add_parser("verify", help="rerun with every step halved, estimate the discretisation error (Richardson)")
     v.add_argument("scenario", type=Path, help="scenario YAML file (twist or curve_entry)")
     v.add_argument("--levels", type=int, default=None, help="number of halvings (default: the scenario's verify.levels, 2)")
@@ -82,6 +129,11 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("compare", help="overlay the results of several runs")
     c.add_argument("dirs", type=Path, nargs="+", help="output folders of earlier runs")
     c.add_argument("--out", type=Path, default=Path("results/compare"), help="folder for the comparison plots")
+    c.add_argument("--wheels", type=_argument("parse_wheels"), default=None, metavar="LIST",
+                   help="twist: the wheels to show, e.g. 1L,3R (default: 1L 1R 4L 4R and the worst wheel)")
+    c.add_argument("--k", type=_k_list, default=None, help="only these k values [W/K], e.g. 0,inf")
+    c.add_argument("--time", type=_argument("parse_window"), default=None, metavar="T0,T1",
+                   help="only this time window [s], e.g. 5,15")
     return p
 
 
@@ -90,10 +142,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     _show_warnings()
     try:
         if args.command == "compare":
-            from .compare import compare_runs
-            for path in compare_runs(args.dirs, args.out):
+            from .compare import Selection, compare_runs
+            select = Selection(args.wheels, tuple(args.k) if args.k else None, args.time)
+            for path in compare_runs(args.dirs, args.out, select):
                 print(path)
             return EXIT_OK
+        if args.command == "validate":
+            return _validate(args)
         if args.command == "verify":
             return _verify(args)
         if args.command == "sweep":
@@ -129,15 +184,14 @@ def _show_warnings() -> None:
         log.propagate = False
 
 
-def _sweep(args) -> int:
-    from .executors import make_executor
-    from .sweep import SweepSpec, is_sweep_file, load_sweep_file, parse_assignment, prepare, run_sweep
-    if is_sweep_file(args.scenario):
-        spec = load_sweep_file(args.scenario)
-    else:
-        spec = SweepSpec(args.scenario)
+def _sweep_spec(args, path: Path):
+    """The sweep of ``path`` (a sweep file, or a scenario) with the command line's --grid, --zip,
+    --set and --k applied."""
+    from .sweep import SweepSpec, is_sweep_file, load_sweep_file, parse_assignment
+    spec = load_sweep_file(path) if is_sweep_file(path) else SweepSpec(path)
     file = spec.source or spec.scenario_file
-    for option, items, target in (("--grid", args.grid, spec.grid), ("--zip", args.zip, spec.zip)):
+    for option, items, target in (("--grid", getattr(args, "grid", []), spec.grid),
+                                  ("--zip", getattr(args, "zip", []), spec.zip)):
         for item in items:
             key, values = parse_assignment(item, file, option, many=True)
             spec.grid.pop(key, None)
@@ -149,6 +203,14 @@ def _sweep(args) -> int:
         spec.base[key] = value
     if args.k:
         spec.base_k = tuple(args.k)
+    return spec
+
+
+def _sweep(args) -> int:
+    from .executors import make_executor
+    from .sweep import prepare, run_sweep
+    spec = _sweep_spec(args, args.scenario)
+    file = spec.source or spec.scenario_file
     jobs = 2 if args.jobs is None else args.jobs
     if jobs < 1:
         raise ScenarioError(file, ["--jobs"], f"expected at least 1 process, got {jobs}")
@@ -170,18 +232,45 @@ def _sweep(args) -> int:
     return EXIT_OK if outcome.all_ok else EXIT_FAILED
 
 
-def _load(args):
-    """The validated scenario with the command line's --k, --set and --jobs applied."""
+def _load(args, path: Optional[Path] = None):
+    """The validated scenario with the command line's --k, --set and --jobs applied; an option
+    that does not apply to the scenario's kind is refused, not ignored."""
     import dataclasses
 
     from .scenario import CAR_KINDS, load_scenario
-    scenario = load_scenario(args.scenario, args.overrides, args.k)
-    if args.jobs is not None:
-        if args.jobs < 1:
-            raise ScenarioError(args.scenario, ["--jobs"], f"expected at least 1 process, got {args.jobs}")
-        if scenario.kind in CAR_KINDS:      # rig scenarios run in one process
-            scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=args.jobs))
+    path = path or args.scenario
+    scenario = load_scenario(path, args.overrides, args.k)
+    if args.k and scenario.kind == "rig_table2":
+        raise ScenarioError(path, ["--k"], "does not apply to rig_table2: Table 2 is computed for the adiabatic and "
+                                           "isothermal limits")
+    jobs = getattr(args, "jobs", None)
+    if jobs is not None:
+        if jobs < 1:
+            raise ScenarioError(path, ["--jobs"], f"expected at least 1 process, got {jobs}")
+        if scenario.kind not in CAR_KINDS:
+            raise ScenarioError(path, ["--jobs"], f"does not apply to {scenario.kind}: rig scenarios run in one "
+                                                  f"process (their cases take seconds)")
+        scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=jobs))
     return scenario
+
+
+def _validate(args) -> int:
+    """Load and check every file (a sweep file: every case) without running anything."""
+    from .sweep import is_sweep_file, prepare
+    bad = 0
+    for path in args.scenarios:
+        try:
+            if is_sweep_file(path):
+                prepared = prepare(_sweep_spec(args, path))
+                print(f"{path}: valid sweep, {len(prepared.cases)} cases of {prepared.base.kind}")
+            else:
+                s = _load(args, path)
+                k = "" if s.kind == "rig_table2" else f", k = {', '.join(map(k_label, s.k_W_per_K))} W/K"
+                print(f"{path}: valid {s.kind} scenario '{s.name}'{k}, {len(s.checks)} checks")
+        except ScenarioError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            bad += 1
+    return EXIT_BAD_INPUT if bad else EXIT_OK
 
 
 def _verify(args) -> int:
@@ -223,6 +312,9 @@ def _run(args) -> int:
     progress = Progress(scenario.name, quiet=args.quiet)
     with interrupts.handled(), OutputFolder(out, args.overwrite):
         outcome = run_scenario(scenario, out, progress)
+        if args.command == "check" and not interrupts.stop_requested():
+            from .writer import write_verdict
+            write_verdict(outcome, out)
     if interrupts.stop_requested():
         name = signal.Signals(interrupts.received_signal()).name
         (out / INCOMPLETE).write_text(f"interrupted by {name}: the run stopped before its end\n")
@@ -231,12 +323,11 @@ def _run(args) -> int:
         return interrupts.exit_code()
     print(outcome.report())
     print(f"results in {out}/")
-    if outcome.diverged:
-        return EXIT_FAILED
     if args.command == "check":
         print(outcome.check_report())
+        print(f"verdict in {out}/check.json and check.xml (JUnit)")
         return EXIT_OK if outcome.checks_hold() else EXIT_FAILED
-    return EXIT_OK
+    return EXIT_FAILED if outcome.diverged else EXIT_OK
 
 
 if __name__ == "__main__":

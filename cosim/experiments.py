@@ -276,6 +276,8 @@ class Scenario:
     solver: SolverSettings = SolverSettings()
     verify: VerifySettings = VerifySettings()
     checks: Tuple[Check, ...] = ()
+    #: validity flags (:data:`cosim.validity.FLAGS`) that ``check`` accepts instead of failing on
+    allow: Tuple[str, ...] = ()
     raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     def with_valves(self, valves: bool) -> "Scenario":

@@ -9,6 +9,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 from .checks import CaseMetrics, Check, check_report, check_value, passes
 from .experiments import Scenario
+from .validity import failures
 
 #: warnings about results (validity, settling) go here, not through the progress lines: --quiet
 #: silences progress only
@@ -83,11 +84,40 @@ class Outcome:
     def check_results(self) -> List[Tuple[Check, float]]:
         return [(c, self.check_value(c)[0]) for c in self.scenario.checks]
 
+    def validity_failures(self) -> List[str]:
+        """``case: flag`` for every validity flag (:mod:`cosim.validity`) the scenario does not
+        ``allow``."""
+        return failures(self.rows, self.scenario.allow)
+
     def checks_hold(self) -> bool:
-        return all(passes(c, v) for c, v in self.check_results())
+        """Every limit holds, every case ran to its end and none left the models' validity
+        (unless allowed)."""
+        return (all(passes(c, v) for c, v in self.check_results()) and not self.diverged
+                and not self.validity_failures())
 
     def check_report(self) -> str:
-        return check_report(self.scenario.checks, self.cases, self.metrics)
+        lines = check_report(self.scenario.checks, self.cases, self.metrics).splitlines()[:-1]
+        for failure in self.validity_failures():
+            lines.append(f"outside the model's validity: {failure} (FAIL; the scenario's allow: list accepts it)")
+        if self.diverged:
+            lines.append(f"diverged: {self.diverged} (FAIL)")
+        lines.append("all limits hold" if self.checks_hold() else "LIMIT VIOLATED")
+        return "\n".join(lines)
+
+    def verdict(self) -> Dict[str, object]:
+        """The machine-readable result of ``check`` (``check.json``): overall status, and every
+        check, validity flag and divergence with its own status."""
+        items = []
+        for c in self.scenario.checks:
+            value, where = self.check_value(c)
+            items.append({"name": c.text, "metric": c.metric, "op": c.op, "limit": c.limit, "value": value,
+                          "at": where, "status": "pass" if passes(c, value) else "fail"})
+        items += [{"name": f"validity: {f}", "status": "fail", "message": "outside the model's validity"}
+                  for f in self.validity_failures()]
+        if self.diverged:
+            items.append({"name": "run completes", "status": "fail", "message": self.diverged})
+        return {"scenario": str(self.scenario.file), "name": self.scenario.name, "kind": self.scenario.kind,
+                "status": "pass" if self.checks_hold() else "fail", "checks": items}
 
 
 @dataclass(frozen=True)

@@ -14,10 +14,19 @@ import numpy as np  # noqa: E402
 
 @dataclass
 class Curve:
+    """A line; ``style`` a matplotlib format (``-``, ``o-``); ``lower``/``upper``: an envelope
+    shaded in the line's colour (e.g. the range of each cycle around its mean)."""
+
     x: Sequence[float]
     y: Sequence[float]
     label: str
     style: str = "-"
+    lower: Optional[Sequence[float]] = None
+    upper: Optional[Sequence[float]] = None
+
+
+#: line styles cycled after the ten colours: every curve of a panel looks different (40 curves)
+LINE_STYLES = ("-", "--", ":", "-.")
 
 
 @dataclass
@@ -47,12 +56,24 @@ class Figure:
         return save_panels(Path(folder) / self.name, self.panels, self.title, ncols=self.ncols)
 
 
+def curve_style(i: int) -> Tuple[str, str]:
+    """(colour, line style) of a panel's ``i``-th curve: ten colours, then the next line style."""
+    return f"C{i % 10}", LINE_STYLES[(i // 10) % len(LINE_STYLES)]
+
+
 def save_panels(path: Path, panels: Sequence[Panel], suptitle: Optional[str] = None, ncols: int = 1) -> Path:
     nrows = -(-len(panels) // ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(7.5 * ncols, 3.6 * nrows), squeeze=False)
+    # constrained layout keeps the titles (figure, panels) and labels clear of each other
+    fig, axes = plt.subplots(nrows, ncols, figsize=(7.5 * ncols, 3.6 * nrows + (0.5 if suptitle else 0.0)),
+                             squeeze=False, layout="constrained")
     for ax, panel in zip(axes.ravel(), panels):
-        for c in panel.curves:
-            ax.plot(c.x, c.y, c.style, label=c.label, lw=1.2, ms=4)
+        for i, c in enumerate(panel.curves):
+            colour, dashes = curve_style(i)
+            marker = c.style.replace("-", "").replace(":", "").replace(".", "") or None
+            ax.plot(c.x, c.y, color=colour, ls=dashes if "-" in c.style or ":" in c.style else "none",
+                    marker=marker, label=c.label, lw=1.2, ms=4)
+            if c.lower is not None and c.upper is not None:
+                ax.fill_between(c.x, c.lower, c.upper, color=colour, alpha=0.2, lw=0)
         for value, label in panel.hlines:
             ax.axhline(value, color="k", ls="--", lw=0.9)
             ax.annotate(label, (0.01, value), xycoords=("axes fraction", "data"), fontsize=8,
@@ -72,7 +93,6 @@ def save_panels(path: Path, panels: Sequence[Panel], suptitle: Optional[str] = N
         ax.set_visible(False)
     if suptitle:
         fig.suptitle(suptitle, fontsize=11)
-    fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -79,7 +79,7 @@ def k_label(k: float) -> str:
 
 def versions() -> Dict[str, str]:
     out = {"python": platform.python_version()}
-    for dist in ("pneumorail", "exudyn", "numpy", "scipy", "pyyaml", "matplotlib"):
+    for dist in ("pneumorail", "exudyn", "numpy", "scipy", "pyyaml", "matplotlib", "xarray"):
         try:
             out[dist] = metadata.version(dist)
         except metadata.PackageNotFoundError:

@@ -15,31 +15,24 @@ from pneumatics.rig import (dynamic_stiffness_sweep, quasi_static_stiffness_tabl
                             sine_motion)
 
 from .experiments import RampTest, Scenario, SineTest
-from .outcome import Outcome, Runner, warn
+from .outcome import Outcome, Runner
 from .plots import Curve, Figure, Panel, k_legend
 from .results import Progress, k_label
 
-#: Mach number of the pipe flow above which eq. (5)'s incompressible law is outside its validity.
-MACH_WARNING = 0.3
 
 
 def run(scenario: Scenario, progress: Progress) -> Outcome:
-    """A rig scenario: its summary rows, a time series per run, diagnoses and validity warnings."""
+    """A rig scenario: its summary rows, a time series per run and the diagnoses of early stops."""
     t0 = time.perf_counter()
     diagnoses: List[str] = []
-    found: List[str] = []
     stage = {"rig_ramp": _ramp, "rig_sine": _sine, "rig_stiffness": _stiffness, "rig_table2": _table2}[scenario.kind]
-    rows, series = stage(scenario, progress, diagnoses, found)
-    return Outcome(scenario, rows, series=series, diagnoses=diagnoses, warnings=found,
-                   wall_s=time.perf_counter() - t0)
+    rows, series = stage(scenario, progress, diagnoses)
+    return Outcome(scenario, rows, series=series, diagnoses=diagnoses, wall_s=time.perf_counter() - t0)
 
 
-def _keep_diagnosis(ts, diagnoses: List[str], found: List[str], progress: Progress) -> None:
-    """Report an early stop, and a pipe flow beyond the incompressible law's validity."""
-    if ts.pipe_mach.size and ts.pipe_mach.max() > MACH_WARNING:
-        i = int(np.argmax(ts.pipe_mach > MACH_WARNING))
-        warn(found, f"the pipe flow exceeds Mach {MACH_WARNING} from t = {ts.t_s[i]:.3g} s (up to Mach "
-                    f"{ts.pipe_mach.max():.2f}): the incompressible pipe law (eq. 5) is outside its validity there")
+def _keep_diagnosis(ts, diagnoses: List[str], progress: Progress) -> None:
+    """Report an early stop (results outside the models' validity are flagged from the summary
+    rows, :mod:`cosim.validity`)."""
     if ts.diagnosis:
         diagnoses.append(ts.diagnosis)
         progress(f"stopped early, results kept up to there: {ts.diagnosis}")
@@ -62,7 +55,7 @@ def rig_dataset(ts, **attrs) -> xr.Dataset:
     return ds
 
 
-def _ramp(scenario: Scenario, progress: Progress, diagnoses: List[str], found: List[str]):
+def _ramp(scenario: Scenario, progress: Progress, diagnoses: List[str]):
     test: RampTest = scenario.test
     rig = scenario.rig
     rows, series = [], {}
@@ -72,7 +65,7 @@ def _ramp(scenario: Scenario, progress: Progress, diagnoses: List[str], found: L
             progress(f"ramp {config}, k = {k_label(k)} W/K")
             ts = run_time_series(comps, k, ramp_motion(test.amplitude_m, test.ramp_s), test.duration_s, test.samples,
                                  max_step_s=test.ramp_s / 50, p0_Pa=rig.initial_pressures(comps))
-            _keep_diagnosis(ts, diagnoses, found, progress)
+            _keep_diagnosis(ts, diagnoses, progress)
             series[f"ramp_{config}_k={k_label(k)}"] = rig_dataset(ts, k_W_per_K=k, configuration=config)
             rows.append({"configuration": config, "k_W_per_K": k, "F_initial_N": ts.force_N[0],
                          "F_peak_N": ts.force_N.max(), "F_final_N": ts.force_N[-1],
@@ -95,7 +88,7 @@ def _ramp_figures(outcome: Outcome) -> List[Figure]:
     return [Figure("fig3_ramp_force.png", panels, "Bellow reaction force to a compression ramp (paper Fig. 3)", 2)]
 
 
-def _sine(scenario: Scenario, progress: Progress, diagnoses: List[str], found: List[str]):
+def _sine(scenario: Scenario, progress: Progress, diagnoses: List[str]):
     test: SineTest = scenario.test
     rig = scenario.rig
     comps = rig.components(with_tank=rig.tank is not None)
@@ -106,19 +99,37 @@ def _sine(scenario: Scenario, progress: Progress, diagnoses: List[str], found: L
         progress(f"sine {test.frequency_Hz:g} Hz, {test.duration_s:g} s, k = {k_label(k)} W/K")
         ts = run_time_series(comps, k, sine_motion(test.amplitude_m, test.frequency_Hz), test.duration_s, n,
                              max_step_s=period / 20, p0_Pa=rig.initial_pressures(comps))
-        _keep_diagnosis(ts, diagnoses, found, progress)
+        _keep_diagnosis(ts, diagnoses, progress)
         series[f"sine_{test.frequency_Hz:g}Hz_k={k_label(k)}"] = rig_dataset(ts, k_W_per_K=k)
         rows.append({"k_W_per_K": k, "frequency_Hz": test.frequency_Hz, **_sine_summary(ts, test),
                      "pipe_mach_max": ts.pipe_mach.max()})
     return rows, series
 
 
+#: a periodic history longer than this many periods is drawn as cycle means with their range
+MAX_PERIODS_DRAWN = 40
+
+
+def cycle_curve(t_s: np.ndarray, y: np.ndarray, samples_per_period: int, label: str, scale: float = 1.0) -> Curve:
+    """``y`` against time; over more than :data:`MAX_PERIODS_DRAWN` periods (a solid band at any
+    figure size) the mean of each period at its centre, shaded between the period's minimum and
+    maximum."""
+    n = (len(y) - 1) // samples_per_period
+    if n <= MAX_PERIODS_DRAWN:
+        return Curve(t_s, y * scale, label)
+    cycles = np.asarray(y[:n * samples_per_period]).reshape(n, samples_per_period) * scale
+    centres = np.asarray(t_s[:n * samples_per_period]).reshape(n, samples_per_period).mean(axis=1)
+    return Curve(centres, cycles.mean(axis=1), f"{label} (cycle mean, range shaded)",
+                 lower=cycles.min(axis=1), upper=cycles.max(axis=1))
+
+
 def _sine_figures(outcome: Outcome) -> List[Figure]:
     test = outcome.scenario.test
     runs = list(outcome.series.values())
+
     def curves(name, scale=1.0):
-        return [Curve(ds["time"].values, ds[name].isel(chamber=0).values * scale, k_legend(ds.attrs["k_W_per_K"]))
-                for ds in runs]
+        return [cycle_curve(ds["time"].values, ds[name].isel(chamber=0).values, test.samples_per_period,
+                            k_legend(ds.attrs["k_W_per_K"]), scale) for ds in runs]
     return [Figure("fig5_bellow_temperature.png",
                    [Panel(curves("T_K"), "time t [s]", "bellow temperature T [K]",
                           f"{test.amplitude_m * 1e3:g} mm sine at {test.frequency_Hz:g} Hz"),
@@ -143,7 +154,7 @@ def _sine_summary(ts, test: SineTest) -> Dict[str, object]:
             "p_bellow_mean_last_period_Pa": ts.p_Pa[0][-spp:].mean()}
 
 
-def _stiffness(scenario: Scenario, progress: Progress, diagnoses: List[str], found: List[str]):
+def _stiffness(scenario: Scenario, progress: Progress, diagnoses: List[str]):
     test = scenario.test
     rig = scenario.rig
     comps = rig.components(with_tank=rig.tank is not None)
@@ -175,16 +186,6 @@ def _stiffness(scenario: Scenario, progress: Progress, diagnoses: List[str], fou
             "z_m": column([test.amplitude_m * np.sin(2 * np.pi * p.loop_phase) for p in loops], "m", "crushing z", "z_m"),
             "F_bellow_N": column([p.loop_F_N for p in loops], "N", "bellow force F", "F_bellow_N"),
             "T_bellow_K": column([p.loop_T_K for p in loops], "K", "bellow temperature T", "T_bellow_K")})
-    fast = [p for p in points if p.stabilised and p.pipe_mach_max > MACH_WARNING]
-    if fast:
-        worst = max(fast, key=lambda p: p.pipe_mach_max)
-        warn(found, f"in {len(fast)} cases the pipe velocity exceeds Mach {MACH_WARNING} "
-                    f"(up to Mach {worst.pipe_mach_max:.2f} at {worst.frequency_Hz:g} Hz, k = {k_label(worst.k_W_per_K)}): "
-                    "the incompressible pipe law (eq. 5) is outside its validity there")
-    unstable = [p for p in points if not p.stabilised]
-    if unstable:
-        warn(found, f"{len(unstable)} of {len(points)} cases did not reach a stable periodic state (stabilised = False "
-                    "in summary.csv, no K_dyn reported)")
     progress(f"sweep of {len(points)} cases took {wall:.1f} s")
     return rows, series
 
@@ -220,7 +221,7 @@ def _no_figures(outcome: Outcome) -> List[Figure]:
     return []
 
 
-def _table2(scenario: Scenario, progress: Progress, diagnoses: List[str], found: List[str]):
+def _table2(scenario: Scenario, progress: Progress, diagnoses: List[str]):
     rig, test = scenario.rig, scenario.test
     progress("quasi-static stiffness (Table 2)")
     table = quasi_static_stiffness_table(rig.bellow, rig.tank, rig.pipe, rig.p0_Pa, AIR.gamma, test.amplitude_m, test.ramp_s)

@@ -10,8 +10,9 @@ from pathlib import Path
 from typing import Optional
 
 from .experiments import CAR_KINDS, RIG_KINDS, Scenario
-from .outcome import Outcome, Runner
+from .outcome import Outcome, Runner, warn
 from .results import Progress
+from .validity import flag_rows, warnings_for
 from .writer import write_outcome
 
 #: kind -> the module whose ``RUNNERS`` dict holds its :class:`Runner`
@@ -23,14 +24,19 @@ def runner(kind: str) -> Runner:
 
 
 def run(scenario: Scenario, progress: Optional[Progress] = None) -> Outcome:
-    """Run ``scenario`` and return its :class:`Outcome` (nothing is written)."""
-    return runner(scenario.kind).run(scenario, progress or Progress(scenario.name, quiet=True))
+    """Run ``scenario`` and return its :class:`Outcome` (nothing is written); every summary row
+    carries its validity flags (:mod:`cosim.validity`)."""
+    outcome = runner(scenario.kind).run(scenario, progress or Progress(scenario.name, quiet=True))
+    flag_rows(outcome.rows)
+    for message in warnings_for(outcome.rows):
+        warn(outcome.warnings, message)
+    return outcome
 
 
 def run_scenario(scenario: Scenario, out_dir: Path, progress: Progress) -> Outcome:
     """Run ``scenario`` and write its results into ``out_dir``."""
     chosen = runner(scenario.kind)
-    outcome = chosen.run(scenario, progress)
+    outcome = run(scenario, progress)
     jobs = scenario.solver.jobs if scenario.kind in CAR_KINDS else 1
     write_outcome(outcome, out_dir, chosen.figures(outcome), jobs)
     return outcome

@@ -3,13 +3,17 @@
 warnings), in that order; every file is written atomically."""
 from __future__ import annotations
 
+import dataclasses
+import json
+import textwrap
+import xml.etree.ElementTree as ET
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Sequence
 
 from .outcome import Outcome
 from .plots import Figure
-from .results import write_columns, write_rows, write_run_json
+from .results import atomic_write, jsonable, write_columns, write_rows, write_run_json
 from .series import case_columns
 
 
@@ -24,10 +28,36 @@ def write_outcome(outcome: Outcome, out: Path, figures: Sequence[Figure] = (), j
         else:
             write_columns(out / "timeseries" / f"{name}.csv", case_columns(ds))
     write_rows(out / "summary.csv", outcome.rows)
+    flagged = sorted({f for r in outcome.rows for f in str(r.get("validity", "ok")).split(";")} - {"ok", ""})
+    if flagged:
+        note = f"[outside the model's validity in some cases: {', '.join(flagged)}; see summary.csv, column validity]"
+        figures = [dataclasses.replace(f, title="\n".join(filter(None, [f.title, textwrap.fill(note, 90 * f.ncols)])))
+                   for f in figures]
     save_figures(out, figures, jobs)
     write_run_json(out, outcome.scenario, outcome.wall_s,
                    {"diverged": outcome.diverged, "metrics": outcome.metrics, "warnings": outcome.warnings,
                     **outcome.info})
+
+
+def write_verdict(outcome: Outcome, out: Path) -> None:
+    """``check.json`` (:meth:`Outcome.verdict`) and ``check.xml``, the same as a JUnit report
+    (one test case per check, validity flag and divergence) for CI systems."""
+    verdict = outcome.verdict()
+    with atomic_write(Path(out) / "check.json") as fh:
+        fh.write(json.dumps(jsonable(verdict), indent=2, allow_nan=False) + "\n")
+    items = verdict["checks"]
+    suite = ET.Element("testsuite", name=f"pneumorail check {verdict['name']}", tests=str(len(items)),
+                       failures=str(sum(i["status"] == "fail" for i in items)), errors="0",
+                       time=f"{outcome.wall_s:.3f}")
+    for item in items:
+        case = ET.SubElement(suite, "testcase", classname=f"pneumorail.{verdict['name']}", name=item["name"])
+        if "value" in item:
+            ET.SubElement(case, "system-out").text = f"value {item['value']:.6g} at {item['at'] or 'the run'}"
+        if item["status"] == "fail":
+            message = item.get("message") or f"{item['value']:.6g} violates {item['name']} ({item['at']})"
+            ET.SubElement(case, "failure", message=message)
+    with atomic_write(Path(out) / "check.xml") as fh:
+        fh.write(ET.tostring(ET.ElementTree(suite).getroot(), encoding="unicode", xml_declaration=True) + "\n")
 
 
 def save_figures(out: Path, figures: Sequence[Figure], jobs: int = 1) -> None:
