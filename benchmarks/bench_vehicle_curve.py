@@ -9,6 +9,13 @@ wheel loads, the carbody roll and lateral offset.
 
     python benchmarks/bench_vehicle_curve.py            # 3 runs per case (~1 min)
     python benchmarks/bench_vehicle_curve.py --quick    # 1 run of the default case
+    python benchmarks/bench_vehicle_curve.py --contact  # contact against kinematic guidance
+
+``--contact`` (issue 11): the same curve entry with ``guidance="contact"`` (free wheelsets on
+the S1002/UIC60 contact) and with the default kinematic guidance, alternately, 5 ms macro and
+internal steps, median of 3 runs each (``--runs``): wall time per 30 s, the ratio, Newton
+iterations per step, Jacobians, contact-law evaluations per step, and the 1R wheel's Q, Y/Q at
+the end as a check.
 
 Prints, per (macro-step, internal step), the median over the runs of the wall time per 30 s
 simulated, Newton iterations per internal step, fresh Jacobians, the split of one macro-step
@@ -39,9 +46,18 @@ def paper_track() -> TrackGeometry:
 
 
 def run(macro_s: float, step_s: float, horizon_s: float = HORIZON_S,
-        time_prestep: bool = False) -> dict:
+        time_prestep: bool = False, guidance: str = "kinematic") -> dict:
     car = MetroCar(VehicleParams(), step_s=step_s, track=paper_track(),
-                   speed_m_per_s=SPEED_M_PER_S)
+                   speed_m_per_s=SPEED_M_PER_S, guidance=guidance)
+    law_calls = [0]
+    if guidance == "contact":  # count the contact-law evaluations (adds ~0.2 us per call)
+        forces = car._wr.forces
+
+        def counted(q, q_t):
+            law_calls[0] += 1
+            return forces(q, q_t)
+
+        car._wr.forces = counted
     prestep = [0.0, 0]
     if time_prestep:  # wrap the PreStep user function to time it (adds ~0.3 us per call)
         inner = car._pre_step
@@ -61,13 +77,42 @@ def run(macro_s: float, step_s: float, horizon_s: float = HORIZON_S,
             "newton_per_step": car._solver.it.newtonStepsCount / steps,
             "jacobians": car.jacobian_count, "split_us": split_us,
             "prestep_us": prestep[0] / max(prestep[1], 1) * 1e6,
-            "roll_end_rad": car.carbody_roll_rad()}
+            "roll_end_rad": car.carbody_roll_rad(), "law_per_step": law_calls[0] / steps,
+            "Q_1R": car.wheel_loads_N()[1], "Y_1R": car.lateral_wheel_forces_N()[1]}
+
+
+def compare_guidance(runs: int, horizon_s: float) -> None:
+    """Contact against kinematic guidance on the curve entry (see the module doc)."""
+    print(f"curve entry, {horizon_s:g} s simulated at {SPEED_M_PER_S:g} m/s, 5 ms steps; "
+          f"median of {runs} run(s) per guidance, alternating")
+    res = {"kinematic": [], "contact": []}
+    for _ in range(runs):
+        for guidance in res:
+            res[guidance].append(run(5e-3, 5e-3, horizon_s, guidance=guidance))
+    print(" guidance  | wall/30 s | Newton/step  Jacobians  law calls/step | roll_end [rad]"
+          " | Q_1R [kN]  Y/Q_1R")
+    walls = {}
+    for guidance, rs in res.items():
+        walls[guidance] = statistics.median(r["wall_per_30s"] for r in rs)
+        r0 = rs[0]
+        print(f" {guidance:9s} | {walls[guidance]:8.3f} s | {r0['newton_per_step']:10.2f}"
+              f" {r0['jacobians']:10d} {r0['law_per_step']:14.2f} | {r0['roll_end_rad']:.6f}"
+              f"      | {r0['Q_1R'] / 1e3:8.2f}  {r0['Y_1R'] / r0['Q_1R']:6.3f}")
+    print(f"contact / kinematic: {walls['contact'] / walls['kinematic']:.2f}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="1 run of the 5 ms / 5 ms case")
+    ap.add_argument("--contact", action="store_true",
+                    help="contact against kinematic guidance (issue 11)")
+    ap.add_argument("--runs", type=int, default=3, help="runs per guidance with --contact")
+    ap.add_argument("--horizon", type=float, default=HORIZON_S,
+                    help="simulated seconds with --contact")
     args = ap.parse_args()
+    if args.contact:
+        compare_guidance(args.runs, args.horizon)
+        return
     runs = 1 if args.quick else 3
     cases = [(5e-3, 5e-3)] if args.quick else [(5e-3, 5e-3), (5e-3, 2.5e-3), (10e-3, 5e-3),
                                                (10e-3, 10e-3)]

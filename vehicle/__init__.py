@@ -6,8 +6,8 @@
 * :mod:`vehicle.suspension` -- force laws of the secondary components (anti-roll bar, Maxwell
   dampers with blow-off, emergency spring and bumpstops), pure functions on floats or exudyn
   symbolic expressions;
-* :mod:`vehicle.wheelrail` -- wheel/rail profiles, contact geometry, creep forces and a free
-  wheelset on track;
+* :mod:`vehicle.wheelrail` -- wheel/rail profiles, contact geometry, creep forces, a free
+  wheelset on track, and the contact forces of the car's wheelsets (``guidance="contact"``);
 * :mod:`vehicle.track` -- track centre-line geometry (curve entry);
 * :mod:`vehicle.guidance` -- :class:`~vehicle.guidance.TrackSampler`, the tabulated track the
   running car evaluates every time step.

@@ -47,7 +47,7 @@ on level track.
   body below the wheel centre, against the rail height prescribed for that wheel: the track's
   cant (rails at -/+ (contact spacing / 2) sin(cant), left/right) plus the optional
   ``rail_height_m`` irregularity. Lateral wheel-rail forces (creep, flange) are not modelled:
-  the guidance carries them.
+  the guidance carries them. (Kinematic guidance; see "Contact guidance" below.)
 * Wheelset guidance (:meth:`MetroCar._add_wheelset_guidance`): each wheelset runs along the
   track at constant speed v, at arc length s_i(t) = s0_i + v t. A ``GenericJoint`` to ground
   at rail level (the point midway between the wheelset's contacts), whose frame follows the
@@ -59,6 +59,31 @@ on level track.
   does between two rails. ``track=None`` is an unbounded straight level track along x (speed 0:
   the stationary rig of the twist test). The centrifugal and gyroscopic loads arise from this
   prescribed motion alone; no force is added.
+* Contact guidance (``guidance="contact"``, issue 11): the wheelsets are free laterally, in yaw
+  and roll, held on the track by the wheel-rail contact forces alone; the vertical Hertz
+  connectors are replaced by the contact law of :mod:`vehicle.wheelrail.contact_law` for all
+  8 wheels (:class:`~vehicle.wheelrail.track_contact.WheelsetTrackContact`): Hertz normal force
+  along the contact normal, Kalker's linear creep forces with Shen-Hedrick-Elkins saturation
+  (mu = :class:`~vehicle.params.ContactParams` ``friction_coefficient``), from the rigid contact
+  table of S1002 on UIC60 1:40 for the car's wheel radius, evaluated per wheel at its lateral
+  position relative to its own rail. Each wheelset has a spin coordinate (a one-coordinate node
+  with the spin inertia; the wheelset body does not rotate about its axle). The guidance joint
+  keeps only the wheelset's position along the track, s_i(t) = s0_i + v t (the car is *driven
+  by its wheelsets*: the joint's longitudinal reaction at rail level is the traction that keeps
+  the speed), and the body's pitch. Per internal step (PreStep) each wheelset gets its track
+  frame at its own arc length (position, heading, cant, curvature from the
+  :class:`~vehicle.guidance.TrackSampler`; the rail heights and cross-level roll that frame,
+  lateral alignment and gauge move each rail).
+  The law runs as one Python force user function for the whole car (one call per residual
+  evaluation) with a vectorised finite-difference Jacobian user function. Outputs:
+  :meth:`MetroCar.lateral_wheel_forces_N`, :meth:`MetroCar.wheel_loads_N` (normal to the track
+  plane), :meth:`MetroCar.wheelset_lateral_forces_N`,
+  :meth:`MetroCar.wheelset_lateral_displacement_m`, :meth:`MetroCar.angle_of_attack_rad`,
+  :meth:`MetroCar.flange_contact`, :meth:`MetroCar.contact_state`. Static start: each wheelset
+  at the height where the contact carries the static wheel load (no settling transient).
+  Standstill: creepages are divided by max(v, ``min_creep_speed_m_per_s`` = 0.01 m/s).
+  Cost (benchmarks/bench_vehicle_curve.py --contact): ~3.5-4 times the kinematic car on the
+  paper's curve entry (the contact law is evaluated in Python ~6 times per step).
 
 Newton's third law in the strong form (moment balance). A force pair between body-fixed points
 that separate is not collinear and leaves a couple d x f: the bellow pair (F = 42 kN over the
@@ -99,7 +124,8 @@ When the stored Jacobian is kept, the pre-step function withdraws SolveSteps' re
 (``solver.conv.jacobianUpdateRequested``) so that exudyn does not factorise the unchanged matrix
 again: Newton uses the factorisation it holds (the same LU, bit for bit; ~10 % of a step).
 
-Known limits of the running model (see also :class:`MetroCar`):
+Known limits of the running model (see also :class:`MetroCar`); the first two concern kinematic
+guidance only, the others both (contact guidance prescribes the arc lengths too):
 
 * radial wheelsets: the yaw of every wheelset is prescribed to the track heading, so in a curve
   the two wheelsets of a bogie are 2 a / R apart in yaw (0.02 rad at R = 100 m) and the stiff
@@ -120,6 +146,7 @@ Known limits of the running model (see also :class:`MetroCar`):
 """
 from __future__ import annotations
 
+import functools
 import math
 from typing import Callable
 
@@ -129,11 +156,14 @@ from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from .guidance import shared_sampler
-from .params import BELLOWS, WHEELS, VehicleParams  # noqa: F401 (BELLOWS, WHEELS re-exported)
+from .params import BELLOWS, WHEELS, ContactParams, VehicleParams  # noqa: F401 (re-exported)
 from .suspension import (airspring_series_bellow_crushing, airspring_series_force_N,
                          arb_roll_stiffness_N_m_per_rad, bilinear_damper_force_N, maxwell_force_N,
                          maxwell_step)
 from .track import TrackGeometry
+from .wheelrail.contact_law import ContactLawTable, WheelsetParams
+from .wheelrail.geometry import ContactTable, table_path
+from .wheelrail.track_contact import WheelContactOutputs, WheelsetTrackContact
 
 
 #: exudyn minor version this module was written and measured against (the API changes between
@@ -203,6 +233,19 @@ def _check_components(p: VehicleParams) -> None:
                                    p.arb_link_spacing_m)  # raises on a bad geometry
 
 
+@functools.lru_cache(maxsize=8)
+def _contact_table(table_csv: str, wheel_radius_m: float) -> ContactTable:
+    """The contact table of :class:`ContactParams` ``table_csv``, or for an empty one the S1002 /
+    UIC60 1:40 / 1435 mm table for the wheel radius: shipped, else derived (~2 s, cached)."""
+    if table_csv:
+        return ContactTable.from_csv(table_csv)
+    path = table_path(wheel_radius_m)
+    if path.exists():
+        return ContactTable.from_csv(path)
+    from .wheelrail.derive_table import derive_default
+    return derive_default(wheel_radius_m)
+
+
 def _four_floats(values) -> list[float]:
     """(4,) values as a list of floats; None = zeros."""
     return [0.0] * 4 if values is None else np.asarray(values, dtype=float).reshape(4).tolist()
@@ -233,6 +276,34 @@ class MetroCar:
         reuse_jacobian: reuse the Newton Jacobian across :meth:`advance` calls (see module doc).
         carbody_load: build an external force and torque on the carbody, set with
             :meth:`set_carbody_load` (zero until then); e.g. a static roll moment or wind.
+        guidance: how the wheelsets are held on the track (see the module doc):
+            ``"kinematic"`` (default): a joint prescribes each wheelset's position along and
+            across the track and its yaw; vertical Hertz contacts, no lateral wheel-rail forces.
+            ``"contact"``: the wheelsets are free laterally and in yaw, held on the track by the
+            wheel-rail contact forces alone (contact table, Hertz normal force along the
+            contact normal, Kalker + Shen-Hedrick-Elkins creep forces; each wheelset's spin is a
+            state). The car keeps its speed by **driving the wheelsets**: a joint prescribes
+            each wheelset's position *along* the track, s_i(t) = s0_i + v t (and holds the
+            pitch of the non-rotating wheelset body); its reaction is the longitudinal force
+            that keeps the speed (the rolling resistance of the creep forces, curving), at rail
+            level. Needs ``speed_m_per_s >= 0``.
+        contact: parameters of the contact guidance (:class:`~vehicle.params.ContactParams`;
+            None = defaults); ignored with kinematic guidance.
+        irregularity: track irregularities, ``irregularity(s_m: np.ndarray) -> (lateral_m,
+            vertical_m, cross_level_m, gauge_m)`` (arrays shaped like s, metres; e.g. a
+            :class:`vehicle.irregularities.TrackIrregularity`) at the wheelsets' arc lengths
+            s_i(t), evaluated at the end of every internal step. Signs as there: lateral and
+            vertical displace the track centre line (+ left, + up), cross-level is z_R - z_L,
+            gauge + wider; each rail moves by y_L,R = lateral +- gauge/2, z_L,R = vertical -+
+            cross_level/2. With contact guidance every wheel sees its own rail's offsets (and
+            their rates). With kinematic guidance the heights add to ``rail_height_m`` and a
+            running car's guidance follows the lateral alignment; gauge has no effect there.
+            Should be 0 under the car at t = 0 (static start). None = design track.
+        wheelset_lateral_offset_m: contact guidance only: (4,) initial lateral displacements
+            [m] of the wheelsets (+ left), e.g. to release them on straight track; each starts
+            at the rigid-contact height and roll of the table at that displacement (with the
+            static Hertz approach), at rest laterally, the rest of the car at its static
+            position. None = centred (the static equilibrium).
     """
 
     #: the stored Newton Jacobian is renewed at the next macro-step once the track heading has
@@ -245,7 +316,19 @@ class MetroCar:
                  speed_m_per_s: float = 0.0, start_s_m: float | None = None,
                  spectral_radius: float = 0.8,
                  newton_abs_tol: float = 1e-4, newton_rel_tol: float = 1e-8,
-                 reuse_jacobian: bool = True, carbody_load: bool = False):
+                 reuse_jacobian: bool = True, carbody_load: bool = False,
+                 guidance: str = "kinematic", contact: ContactParams | None = None,
+                 irregularity: Callable[[np.ndarray], tuple] | None = None,
+                 wheelset_lateral_offset_m=None):
+        if guidance not in ("kinematic", "contact"):
+            raise ValueError(f"guidance must be 'kinematic' or 'contact', got {guidance!r}")
+        if irregularity is not None and not callable(irregularity):
+            raise ValueError("irregularity must be callable: irregularity(s_m) -> (lateral_m, "
+                             "vertical_m, cross_level_m, gauge_m)")
+        #: "kinematic" or "contact" (see the class doc)
+        self.guidance = guidance
+        self._contact_mode = guidance == "contact"
+        self._irr = irregularity
         if not step_s > 0.0:
             raise ValueError(f"step_s must be > 0, got {step_s}")
         if not math.isfinite(speed_m_per_s):
@@ -278,6 +361,8 @@ class MetroCar:
                                     or p.vertical_bumpstop_stiffness_N_per_m > 0.0)
         self._carbody_load = carbody_load
         self._init_run(track, float(speed_m_per_s), start_s_m)
+        if self._contact_mode:
+            self._init_contact(contact or ContactParams())
 
         rail0 = self._rail_at(0.0)
         self._rail_cache = (0.0, rail0)  # (t, heights) of the last preStep evaluation
@@ -286,7 +371,11 @@ class MetroCar:
         self.SC = exu.SystemContainer()
         self.mbs = self.SC.AddSystem()
         self._build(rail0)
+        if wheelset_lateral_offset_m is not None:
+            self._offset_wheelsets(wheelset_lateral_offset_m)
         self.mbs.Assemble()
+        if self._contact_mode:
+            self._init_contact_state()
         self._init_solver(spectral_radius, newton_abs_tol, newton_rel_tol, reuse_jacobian)
         if self._maxwell:
             self._maxwell_t = 0.0  # time of the Maxwell states (last accepted step end)
@@ -330,6 +419,43 @@ class MetroCar:
         self._sampler = shared_sampler(track)
         self._guided = True
         self._canted = any(getattr(seg, "cant_rad", 0.0) != 0.0 for seg in track.segments)
+
+    def _init_contact(self, cp: ContactParams) -> None:
+        """Contact guidance: the contact law for the car's wheelsets and the static wheelset
+        height on the contacts (the reference configuration, see the module doc)."""
+        p = self.params
+        if self.speed_m_per_s < 0.0:
+            raise ValueError("guidance='contact' needs speed_m_per_s >= 0 (the creep law's "
+                             f"rolling direction), got {self.speed_m_per_s}")
+        g = p.gravity_m_per_s2
+        #: contact parameters (guidance="contact")
+        self.contact_params = cp
+        #: the contact table in use (guidance="contact")
+        self.contact_table = _contact_table(cp.table_csv, float(p.wheel_radius_m))
+        wp = WheelsetParams(
+            mass_kg=p.wheelset_mass_kg, roll_inertia_kg_m2=p.wheelset_inertia_xx_kg_m2,
+            spin_inertia_kg_m2=p.wheelset_inertia_yy_kg_m2,
+            yaw_inertia_kg_m2=p.wheelset_inertia_zz_kg_m2, axle_load_N=2.0 * self._P_axlebox_N,
+            gravity_m_per_s2=g, hertz_constant_N_per_m1_5=p.hertz_constant_N_per_m1_5,
+            contact_damping_N_s_per_m=p.contact_damping_N_s_per_m,
+            friction_coefficient=cp.friction_coefficient)
+        law = ContactLawTable(self.contact_table, wp)
+        r0 = self.contact_table.r0
+
+        def contact_model(z_centre):
+            refs = [[float(x) + self._x0_m, 0.0, z_centre] for x in self.wheelset_x_m]
+            return WheelsetTrackContact(law, wp, refs, r0, self.speed_m_per_s,
+                                        cp.min_creep_speed_m_per_s, cp.flange_angle_rad)
+
+        # the wheelset centre sits r0 above the rail plane in the rigid centred contact and
+        # approaches it by the Hertz deflection under the static wheel load
+        rise = contact_model(r0).static_rise_m(self.Q_static_N)
+        self._z_wheelset_m = r0 + rise
+        self._wr = contact_model(self._z_wheelset_m)
+        self._wr_left_table = None  # (t, wheelset lateral positions) when a wheelset left it
+        self._wr_rails = None  # (t, e (8,), zr (8,)) of the last rail evaluation
+        self._wr_cache = (None, None)  # (key, WheelContactOutputs)
+        self._advances = 0
 
     @property
     def s_m(self) -> float:
@@ -386,8 +512,11 @@ class MetroCar:
             self._add_airspring(k)
         for ib in range(2):
             self._add_bumpstop(ib)
-        for j in range(8):
-            self._add_contact(j, rail0[j])
+        if self._contact_mode:
+            self._add_wheel_rail_contact()
+        else:
+            for j in range(8):
+                self._add_contact(j, rail0[j])
         # optional components (nothing is built when they are off: the same model, bit for bit)
         self._arbs, self._traction_rods, self._dampers = [], [], []
         k_arb = p.arb_roll_stiffness_N_m_per_rad + arb_roll_stiffness_N_m_per_rad(
@@ -422,6 +551,11 @@ class MetroCar:
         that frame, of the track centre line. Motion along the track plane's normal and roll
         about t stay free. The joint's lateral reaction acts where the rails apply it, at rail
         level, at every instant: no couple needs adding.
+
+        Contact guidance locks only t . (p - p0) = xi(t) (the position along the track: the
+        wheelsets are driven at the car's speed) and the pitch, t . e_z = 0 (the wheelset body
+        does not spin; its rotation about the axle is a separate coordinate): lateral motion,
+        yaw and roll are left to the wheel-rail contact forces.
         """
         mbs = self.mbs
         xi = esym.Real(f"xi{iw}", 0.0)  # [m]
@@ -435,9 +569,10 @@ class MetroCar:
             return [xi, eta, zero, rx, ry, rz]
 
         pos = [float(self.wheelset_x_m[iw]) + self._x0_m, 0.0, 0.0]
+        # contact guidance: only the position along the track and the pitch stay prescribed
+        axes = [1, 0, 0, 0, 1, 0] if self._contact_mode else [1, 1, 0, 0, 1, 1]
         joint = mbs.CreateGenericJoint(itemNumbers=[self._ground, self._wheelsets[iw]],
-                                       position=pos, constrainedAxes=[1, 1, 0, 0, 1, 1],
-                                       show=False)
+                                       position=pos, constrainedAxes=axes, show=False)
         if self._guided:
             fn = CreateSymbolicUserFunction(mbs, offset, "offsetUserFunction", joint)
             mbs.SetObjectParameter(joint, "offsetUserFunction", fn)
@@ -753,6 +888,125 @@ class MetroCar:
         self._rail_vars.append((rz, rv))
         self._sym += [fn, zero]
 
+    def _add_wheel_rail_contact(self) -> None:
+        """Contact guidance (``guidance="contact"``): a spin node per wheelset and one
+        ``ObjectGenericODE2`` on all four wheelset bodies and spin nodes (28 coordinates, per
+        wheelset the body's 6 and its spin) whose force user function is the contact law of
+        the 8 wheels (:class:`~vehicle.wheelrail.track_contact.WheelsetTrackContact`, Python:
+        one call per residual evaluation for the whole car) and whose Jacobian user function
+        differentiates the same law (forward differences, one vectorised evaluation).
+
+        Spin nodes: one coordinate each, the rotation about the axle relative to the
+        non-rotating wheelset body, with the wheelsets' spin inertia (``wheelset_inertia_yy``;
+        the body keeps its own, which only meets the held pitch); they start rolling freely at
+        v / r0."""
+        mbs, p = self.mbs, self.params
+        Is = p.wheelset_inertia_yy_kg_m2
+        spin0 = self.speed_m_per_s / self._wr.r0
+        self._spin_nodes = [mbs.AddNode(exu.itemInterface.NodeGenericODE2(
+            referenceCoordinates=[0.0], initialCoordinates=[0.0], initialCoordinates_t=[spin0],
+            numberOfODE2Coordinates=1)) for _ in range(4)]
+        mbs.AddObject(exu.itemInterface.ObjectGenericODE2(nodeNumbers=self._spin_nodes,
+                                                          massMatrix=np.diag([Is] * 4)))
+        self._ws_nodes = [mbs.GetObject(b)["nodeNumber"] for b in self._wheelsets]
+        nodes = [n for pair in zip(self._ws_nodes, self._spin_nodes) for n in pair]
+        wr = self._wr
+
+        def forces(mbs, t, itemNumber, q, q_t):
+            return wr.forces(q, q_t)
+
+        def jacobian(mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
+            return wr.jacobian(q, q_t, fODE2, fODE2_t)
+
+        self._wr_object = mbs.AddObject(exu.itemInterface.ObjectGenericODE2(
+            nodeNumbers=nodes, forceUserFunction=forces, jacobianUserFunction=jacobian))
+
+    def _offset_wheelsets(self, offsets) -> None:
+        """Initial lateral displacements of the wheelsets (see ``wheelset_lateral_offset_m``)."""
+        if not self._contact_mode:
+            raise ValueError("wheelset_lateral_offset_m needs guidance='contact'")
+        y0 = np.asarray(offsets, dtype=float).reshape(4)
+        lo, hi = self._wr.table.y_range_m
+        if not np.all((y0 > lo) & (y0 < hi)):
+            raise ValueError(f"wheelset_lateral_offset_m must lie inside the contact table "
+                             f"({lo} .. {hi} m), got {y0}")
+        geo = self._wr.table.geometry(y0)
+        for body, y, dz, roll in zip(self._wheelsets, y0, geo["dz0"], geo["roll0"]):
+            node = self.mbs.GetObject(body)["nodeNumber"]
+            self.mbs.SetNodeParameter(node, "initialCoordinates",
+                                      [0.0, float(y), float(dz), float(roll), 0.0, 0.0])
+
+    def _init_contact_state(self) -> None:
+        """After Assemble: the object's coordinate indices in the system vectors and the track
+        frames at t = 0."""
+        idx = []
+        for nb, ns in zip(self._ws_nodes, self._spin_nodes):
+            i0 = int(self.mbs.GetNodeODE2Index(nb))
+            idx += list(range(i0, i0 + 6)) + [int(self.mbs.GetNodeODE2Index(ns))]
+        self._wr_index = np.array(idx)
+        self._set_contact_track(0.0, 0.0)
+
+    def _contact_rail_values(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(8,) lateral rail offsets e (+ left) and (8,) rail height offsets zr (+ up, normal to
+        the track plane) under each wheel at time t (contact guidance; the cant is in the track
+        frame, not here)."""
+        z = np.zeros(8) if self._rail_fn is None else np.array(self._rail_fn(t), dtype=float)
+        if z.shape != (8,):
+            raise ValueError(f"rail_height_m(t) must return shape (8,), got {z.shape}")
+        e = np.zeros(8)
+        if self._irr is not None:
+            lat, ver, cross, gauge = self._irregularity_at(t)
+            e[0::2], e[1::2] = lat + 0.5 * gauge, lat - 0.5 * gauge
+            z[0::2] += ver - 0.5 * cross
+            z[1::2] += ver + 0.5 * cross
+        return e, z
+
+    def _irregularity_at(self, t: float) -> tuple[np.ndarray, ...]:
+        """(lateral, vertical, cross_level, gauge), each (4,), under the wheelsets at time t."""
+        s = self._s0_wheelset + self.speed_m_per_s * t
+        out = tuple(np.broadcast_to(np.asarray(v, dtype=float), s.shape).astype(float)
+                    for v in self._irr(s))
+        if len(out) != 4 or not all(np.all(np.isfinite(v)) for v in out):
+            raise ValueError("irregularity(s) must return 4 finite arrays (lateral_m, "
+                             "vertical_m, cross_level_m, gauge_m) shaped like s")
+        return out
+
+    def _set_contact_track(self, t: float, t0: float, state=None) -> None:
+        """Track frames and rail offsets (with their mean rates over the step t0 -> t) of the
+        contact law for the step ending at t."""
+        state = state or self._track_at(t)
+        if self._rail_fn is None and self._irr is None:
+            self._wr.set_track(state)
+            return
+        cached = self._wr_rails
+        e0, z0 = cached[1:] if cached is not None and cached[0] == t0 else \
+            self._contact_rail_values(t0)
+        e1, z1 = self._contact_rail_values(t)
+        h = t - t0
+        ed, zd = ((e1 - e0) / h, (z1 - z0) / h) if h > 0.0 else (np.zeros(8), np.zeros(8))
+        rails = [tuple((e1[j], ed[j], z1[j], zd[j]) for j in (2 * i, 2 * i + 1))
+                 for i in range(4)]
+        self._wr.set_track(state, rails)
+        self._wr_rails = (t, e1, z1)
+
+    def _pre_step_contact(self, mbs, t: float) -> bool:
+        """PreStep with contact guidance: guidance offsets (position along the track, pitch),
+        track frames and rail offsets at the step end t; stops the integration (advance
+        raises) when a wheelset has left the contact table (derailed)."""
+        t0 = mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
+        state = self._track_at(t)
+        if self._guided:
+            self._set_guidance(state)
+            self._heading_now = state[0][2]
+        self._set_contact_track(t, t0, state)
+        sd, idx = mbs.systemData, self._wr_index
+        y = self._wr.lateral_positions_at_step_end(sd.GetODE2Coordinates()[idx],
+                                                   sd.GetODE2Coordinates_t()[idx], t - t0)
+        if not self._wr.in_table(y):  # predicted at the step end from the state at its start
+            self._wr_left_table = (t0, y)
+            return False
+        return True
+
     # ================================================================== rail and track
     def _rail_at(self, t: float, track_state=None) -> np.ndarray:
         """(8,) rail heights [m] at time t: cant of the track plus ``rail_height_m``."""
@@ -762,6 +1016,10 @@ class MetroCar:
             h = np.array(self._rail_fn(t), dtype=float)
             if h.shape != (8,):
                 raise ValueError(f"rail_height_m(t) must return shape (8,), got {h.shape}")
+        if self._irr is not None:
+            _, ver, cross, _ = self._irregularity_at(t)
+            h[0::2] += ver - 0.5 * cross
+            h[1::2] += ver + 0.5 * cross
         if self._canted:
             b = self.params.contact_spacing_m / 2.0
             for iw, (_, _, _, cant, _, _) in enumerate((track_state or self._track_at(t))[:4]):
@@ -770,6 +1028,13 @@ class MetroCar:
                     h[2 * iw] -= dz
                     h[2 * iw + 1] += dz
         return h
+
+    def _aligned(self, track_state, t: float) -> list[tuple[float, ...]]:
+        """Kinematic guidance with irregularities: the track state with each wheelset's point
+        moved across the track by the lateral alignment (horizontally, normal to the tangent)."""
+        lat = self._irregularity_at(t)[0]
+        return [(x - math.sin(psi) * e, y + math.cos(psi) * e, psi, *rest)
+                for (x, y, psi, *rest), e in zip(track_state, lat.tolist())]
 
     def _set_guidance(self, track_state) -> None:
         """Guidance offsets (see :meth:`_add_wheelset_guidance`) for the given track state."""
@@ -803,11 +1068,13 @@ class MetroCar:
             self._keep_jacobian()
         if self._maxwell:
             self._h_step.SetValue(t - mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep))
+        if self._contact_mode:
+            return self._pre_step_contact(mbs, t)
         state = self._track_at(t) if self._guided else None
         if self._guided:
-            self._set_guidance(state)
+            self._set_guidance(state if self._irr is None else self._aligned(state, t))
             self._heading_now = state[0][2]
-        if self._rail_fn is None and not self._canted:
+        if self._rail_fn is None and not self._canted and self._irr is None:
             return True  # level rails: nothing else changes
         t0 = mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
         tc, zc = self._rail_cache
@@ -1016,16 +1283,115 @@ class MetroCar:
         self._jac_may_skip = turned <= self.JACOBIAN_HEADING_TOL_RAD
         ok = self._solver.SolveSteps(self.mbs, self._settings)
         self._t = float(it.currentTime)
+        if self._contact_mode:
+            self._advances += 1
+            if self._wr_left_table is not None:
+                t_out, y_out = self._wr_left_table
+                lo, hi = self._wr.table.y_range_m
+                raise RuntimeError(
+                    f"a wheelset left the contact table at t = {t_out:.4f} s (derailment or "
+                    f"flange climb): lateral positions {np.round(1e3 * np.array(y_out), 2)} mm, "
+                    f"the table covers {1e3 * lo:g} .. {1e3 * hi:g} mm relative to the rails")
         if not ok:
             raise RuntimeError(f"exudyn: time integration failed at t={self._t} s "
                                f"(advance to {t_end_s} s)")
         self._t = float(t_end_s)
 
     def wheel_loads_N(self) -> np.ndarray:
-        """(8,) vertical wheel-rail forces Q >= 0 [N] at the current state, :data:`WHEELS` order."""
+        """(8,) vertical wheel-rail forces Q >= 0 [N] at the current state, :data:`WHEELS` order.
+
+        Kinematic guidance: the vertical Hertz contact force (global vertical). Contact
+        guidance: the component of the whole contact force (normal force and creep forces) of
+        the rail on the wheel normal to the track plane (the track frame's z; on canted track
+        perpendicular to the canted plane), i.e. EN 14363's Q in the track frame."""
+        if self._contact_mode:
+            return self.contact_state().force_track_N[:, 2].copy()
         get = self.mbs.GetObjectOutput
         # the contact connector's force f acts as -f = +Q e_z on the wheel
         return np.array([-get(co, _OUT.Force)[2] for co in self._contacts])
+
+    # ================================================================== wheel-rail outputs
+    def contact_state(self) -> WheelContactOutputs:
+        """The contact of every wheel at the current state (contact guidance only; see
+        :class:`~vehicle.wheelrail.track_contact.WheelContactOutputs`: normal forces, forces in
+        the track frame, contact angles, saturation, creepages, wheelset lateral positions and
+        yaw). Evaluated once per state (cached)."""
+        if not self._contact_mode:
+            raise ValueError("contact_state needs guidance='contact'")
+        key = (self._t, self._advances)
+        if self._wr_cache[0] != key:
+            sd = self.mbs.systemData
+            idx = self._wr_index
+            out = self._wr.outputs(sd.GetODE2Coordinates()[idx].tolist(),
+                                   sd.GetODE2Coordinates_t()[idx].tolist())
+            self._wr_cache = (key, out)
+        return self._wr_cache[1]
+
+    def lateral_wheel_forces_N(self) -> np.ndarray:
+        """(8,) lateral wheel-rail forces Y [N], :data:`WHEELS` order: the force of the rail on
+        the wheel along the track plane's lateral axis, **positive towards the track centre**
+        (on the left wheel towards -y, on the right towards +y): the sense in which a flange
+        force pushes the wheelset back, so Y/Q > 0 is the flanging wheel's value in Nadal's
+        criterion. Includes the normal force's lateral component and the creep forces.
+        Kinematic guidance: NaN (no lateral wheel-rail force is modelled; the guidance joint
+        carries it)."""
+        if not self._contact_mode:
+            return np.full(8, np.nan)
+        Fl = self.contact_state().force_track_N[:, 1]
+        return np.where(np.arange(8) % 2 == 0, -Fl, Fl)
+
+    def wheelset_lateral_forces_N(self) -> np.ndarray:
+        """(4,) sum of the two wheels' lateral forces per wheelset [N] in the track frame,
+        positive to the left (the force of the rails on the wheelset; the track receives the
+        opposite): Y_R - Y_L with :meth:`lateral_wheel_forces_N`' inward-positive Y, i.e.
+        EN 14363's track shifting force sum Y. NaN with kinematic guidance."""
+        if not self._contact_mode:
+            return np.full(4, np.nan)
+        Fl = self.contact_state().force_track_N[:, 1]
+        return Fl[0::2] + Fl[1::2]
+
+    def wheelset_lateral_displacement_m(self) -> np.ndarray:
+        """(4,) lateral displacement [m] of each wheelset centre from the design track centre
+        line, in the track plane at the wheelset's arc length, positive to the left (track
+        irregularities are not subtracted: the lateral position relative to the rails is
+        ``contact_state().lateral_to_rails_m``). ~0 with kinematic guidance (prescribed)."""
+        if self._contact_mode:
+            return self.contact_state().lateral_m.copy()
+        return self._wheelset_pose()[0]
+
+    def angle_of_attack_rad(self) -> np.ndarray:
+        """(4,) yaw [rad] of each wheelset relative to the track tangent at its arc length,
+        positive counter-clockwise seen from above (the wheelset's x axis turned to the left).
+        In a left-hand curve a leading wheelset flanging on the outer (right) rail has a
+        negative angle of attack. ~0 with kinematic guidance (prescribed)."""
+        if self._contact_mode:
+            return self.contact_state().yaw_rad.copy()
+        return self._wheelset_pose()[1]
+
+    def flange_contact(self) -> np.ndarray:
+        """(8,) bool: the wheel touches its rail with a contact angle above
+        ``ContactParams.flange_angle_rad`` (default 0.7 rad, 40 deg: the flange flank, see
+        :class:`~vehicle.params.ContactParams`) and a positive normal force. All False with
+        kinematic guidance."""
+        if not self._contact_mode:
+            return np.zeros(8, dtype=bool)
+        c = self.contact_state()
+        return (c.gamma_rad > self.contact_params.flange_angle_rad) & (c.normal_N > 0.0)
+
+    def _wheelset_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lateral offsets of the rail-level points, yaw angles) of the wheelsets relative to
+        the track (from the body states; kinematic guidance)."""
+        body = self.mbs.GetObjectOutputBody
+        y, yaw = [], []
+        for wheelset, (xt, yt, psi, *_) in zip(self._wheelsets, self._track_at(self._t)):
+            A = np.asarray(body(wheelset, _OUT.RotationMatrix)).reshape(3, 3)
+            # the rail-level point the guidance holds (the centre moves across when the
+            # wheelset rolls on raised rails)
+            x, yb, _ = np.asarray(body(wheelset, _OUT.Position)) - self._z_wheelset_m * A[:, 2]
+            y.append(-math.sin(psi) * (x - xt) + math.cos(psi) * (yb - yt))
+            yaw.append(math.atan2(A[1, 0], A[0, 0]) - psi)
+        yaw = (np.array(yaw) + math.pi) % (2.0 * math.pi) - math.pi
+        return np.array(y), yaw
 
     def carbody_roll_rad(self) -> float:
         """Carbody roll angle [rad], right-hand about its own x axis (forward): positive = left

@@ -210,6 +210,53 @@ class VehicleParams:
     vertical_bumpstop_stiffness_N_per_m: float = 0.0
 
 
+@dataclass(frozen=True)
+class ContactParams:
+    """Wheel-rail contact of :class:`~vehicle.car.MetroCar` with ``guidance="contact"`` (issue
+    11): the wheelsets run free laterally and in yaw on the contact forces of
+    :mod:`vehicle.wheelrail.contact_law` (Hertz normal force along the contact normal, Kalker's
+    linear creep forces with Shen-Hedrick-Elkins saturation). The normal contact's Hertz
+    constant and damping are :class:`VehicleParams`' ``hertz_constant_N_per_m1_5`` and
+    ``contact_damping_N_s_per_m``, the wheel radius ``wheel_radius_m`` (the radius at the tape
+    circle of the table's wheel profile); ``contact_spacing_m`` is not used (the contact points
+    come from the table: 1.5065 m apart for S1002 on UIC60 1:40, centred). Kept apart from
+    :class:`VehicleParams` because dimensionless and text values do not fit its unit-suffixed
+    numeric fields (tests/test_vehicle.py), and so that the scenario YAML mirror of
+    VehicleParams is unchanged."""
+
+    # Wheel-rail friction coefficient mu: the creep forces saturate at mu N. 0.36 is the value
+    # the issue's Nadal limit uses (70 deg flange, mu 0.36: Y/Q 1.20); dry rail 0.3-0.5, wet
+    # 0.15-0.25 (Iwnicki, Handbook of Railway Vehicle Dynamics, ch. "Wheel-rail contact").
+    friction_coefficient: float = 0.36
+    # Creepages are slip velocities divided by the running speed V; below this speed they are
+    # divided by it instead, so that the car can stand (V = 0, the twist test) or start: the
+    # creep forces then act as viscous forces f_ij / V_min on the slip velocities (for a 30 kN
+    # wheel f22 / V_min ~ 1e9 N s/m at 0.01 m/s), stiff enough to hold a standing car like
+    # static friction would (a wheelset pushed by 1 kN creeps at ~1 um/s; saturation still
+    # caps the forces at mu N). With 1 m/s the standing car of the twist test drifts sideways
+    # and in yaw and its wheel loads move by ~1 % of Q0 within seconds. At and above V_min the
+    # law is Kalker's, unchanged.
+    min_creep_speed_m_per_s: float = 0.01
+    # A wheel counts as in flange contact (:meth:`MetroCar.flange_contact`) when its contact
+    # angle exceeds this: 0.7 rad (40 deg) separates the tread and flange root (S1002 on UIC60
+    # 1:40: up to 0.53 rad before the jump) from the flange flank (1.22 rad, 70 deg).
+    flange_angle_rad: float = 0.7
+    # Contact table: a CSV written by vehicle.wheelrail.ContactTable.to_csv; "" = the S1002 /
+    # UIC60 1:40 / 1435 mm table for the car's wheel radius (shipped for 0.42 m and 0.46 m,
+    # vehicle/wheelrail/data, else derived from the profiles in ~2 s).
+    table_csv: str = ""
+
+    def __post_init__(self):
+        if not (self.friction_coefficient > 0.0 and math.isfinite(self.friction_coefficient)):
+            raise ValueError(f"friction_coefficient must be > 0, got {self.friction_coefficient}")
+        if not (self.min_creep_speed_m_per_s > 0.0
+                and math.isfinite(self.min_creep_speed_m_per_s)):
+            raise ValueError("min_creep_speed_m_per_s must be > 0, got "
+                             f"{self.min_creep_speed_m_per_s}")
+        if not 0.0 < self.flange_angle_rad < math.pi / 2:
+            raise ValueError(f"flange_angle_rad must lie in (0, pi/2), got {self.flange_angle_rad}")
+
+
 def metro_car_arb_dampers() -> VehicleParams:
     """The paper's metro car (the :class:`VehicleParams` defaults) with the secondary components
     an air-sprung metro car usually has: an anti-roll bar per bogie, vertical and lateral

@@ -11,7 +11,10 @@ the exudyn wheelset model :mod:`vehicle.wheelrail.wheelset`, which this package 
   with floats, arrays or exudyn symbolic expressions;
 * :mod:`vehicle.wheelrail.wheelset` -- a free wheelset on track in exudyn with that law (imports
   exudyn, hence not imported here);
-* ``python -m vehicle.wheelrail.derive_table`` rewrites the shipped default table.
+* :mod:`vehicle.wheelrail.track_contact` -- that law on the wheelsets of a multibody vehicle in
+  global coordinates, each with its own track frame and rails (the car's contact guidance;
+  pure math, the exudyn wrapping is in ``vehicle/car.py``);
+* ``python -m vehicle.wheelrail.derive_table [--nominal-radius-m R]`` rewrites the shipped tables.
 
 See ``docs/wheel_rail.md``.
 """

@@ -153,6 +153,7 @@ class _ScalarOps:
     sqrt = staticmethod(math.sqrt)
     sin = staticmethod(math.sin)
     cos = staticmethod(math.cos)
+    atan2 = staticmethod(math.atan2)
     pow = staticmethod(math.pow)
 
     @staticmethod
@@ -178,6 +179,7 @@ class _NumpyOps:
     sqrt = staticmethod(np.sqrt)
     sin = staticmethod(np.sin)
     cos = staticmethod(np.cos)
+    atan2 = staticmethod(np.arctan2)
     pow = staticmethod(np.power)
     where = staticmethod(np.where)
     max = staticmethod(np.maximum)
@@ -270,8 +272,13 @@ class ContactLawTable:
 
 # ----------------------------------------------------------------------------- the law
 def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
-                  reference_load_N: float) -> dict:
+                  reference_load_N: float, V_ref=None) -> dict:
     """Contact of one wheel (see the module docstring).
+
+    ``V_ref``: the speed the creepages are divided by (default ``V``). A model that may stand
+    still passes a regularised one, e.g. max(|V|, V_min): the numerators stay the true slip
+    velocities, so below V_min the creep forces become viscous (slip velocity times f / V_min)
+    instead of dividing by zero.
 
     ``geo`` maps the :data:`GEOMETRY_COLUMNS` (and ``droll0``, ``ddz0``) to values or
     expressions at the current y. Returns a dict of values or expressions: ``N`` (normal
@@ -298,7 +305,7 @@ def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetP
     f11, f22 = geo["k11_" + side] * ab, geo["k22_" + side] * ab
     f23, f33 = geo["k23_" + side] * load, geo["k33_" + side] * ops.pow(load, 4.0 / 3.0)
     # --- creepages ---
-    inv_V = 1.0 / V
+    inv_V = 1.0 / (V if V_ref is None else V_ref)
     xi_x = (V * (1.0 - kappa * yc) - lever * st.yaw_t - st.spin_t * r) * inv_V
     xi_y = (st.y_t + r * st.roll_t - V * st.yaw) * inv_V / cg
     phi = ((st.yaw_t + kappa * V) * cg - s * st.spin_t * sg) * inv_V
@@ -348,10 +355,10 @@ def force_and_moment(ops, w: dict, yaw) -> tuple[tuple, tuple]:
 
 
 def wheelset_forces(ops, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
-                    reference_load_N: float) -> tuple[dict, dict]:
+                    reference_load_N: float, V_ref=None) -> tuple[dict, dict]:
     """Both wheels' :func:`wheel_contact` (left, right)."""
-    return (wheel_contact(ops, "L", st, geo, V, kappa, p, reference_load_N),
-            wheel_contact(ops, "R", st, geo, V, kappa, p, reference_load_N))
+    return (wheel_contact(ops, "L", st, geo, V, kappa, p, reference_load_N, V_ref),
+            wheel_contact(ops, "R", st, geo, V, kappa, p, reference_load_N, V_ref))
 
 
 def generalized_forces(ops, st: WheelsetState, geo, V, kappa, p: WheelsetParams,

@@ -1,10 +1,13 @@
-"""Derive the shipped default contact table (``python -m vehicle.wheelrail.derive_table``).
+"""Derive the shipped contact tables (``python -m vehicle.wheelrail.derive_table``).
 
 S1002 wheel (Manchester-benchmark v3 profile) on UIC60 rail (benchmark v3 profile, drawn with
 its 1:40 inclination), gauge 1435 mm measured 14 mm below the running surface, wheel
-back-to-back 1360 mm, tape circle 70 mm from the flange back at r0 = 0.46 m; wheelset lateral
-displacement -12 .. +12 mm every 0.1 mm. Prints the summary numbers quoted in docs/wheel_rail.md.
-``--check`` compares with the stored file instead of writing it.
+back-to-back 1360 mm, tape circle 70 mm from the flange back at the nominal radius (0.46 m for
+the default table, the Manchester wheel; ``--nominal-radius-m 0.42`` for the metro car's 840 mm
+wheels, ``vehicle.params.VehicleParams.wheel_radius_m``); wheelset lateral displacement
+-12 .. +12 mm every 0.1 mm. Prints the summary numbers quoted in docs/wheel_rail.md.
+``--check`` compares with the stored file instead of writing it. The stored files are
+:func:`table_path` of their radius (``data/S1002_UIC60_1in40_1435_r460.csv``, ``..._r420.csv``).
 """
 
 from __future__ import annotations
@@ -14,14 +17,16 @@ import sys
 
 import numpy as np
 
-from .geometry import DEFAULT_RAIL, DEFAULT_TABLE, DEFAULT_WHEEL, ContactTable, COLUMNS
+from .geometry import (DEFAULT_RAIL, DEFAULT_WHEEL, ContactTable, COLUMNS,
+                       table_path)
 
 
-def derive_default() -> ContactTable:
+def derive_default(nominal_radius_m: float = 0.46) -> ContactTable:
+    """The S1002 / UIC60 1:40 / 1435 mm table for wheels of ``nominal_radius_m`` (tape circle)."""
     return ContactTable.from_profiles(DEFAULT_WHEEL, DEFAULT_RAIL, gauge_m=1.435,
                                       inclination=1.0 / 40.0, rail_profile_inclined=True,
                                       flange_back_distance_m=1.360, flange_back_pos_mm=-70.0,
-                                      nominal_radius_m=0.46, tape_circle_y_mm=0.0,
+                                      nominal_radius_m=nominal_radius_m, tape_circle_y_mm=0.0,
                                       gauge_height_mm=14.0, y_max_mm=12.0, dy_mm=0.1)
 
 
@@ -54,17 +59,22 @@ def summary(table: ContactTable) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="compare with the stored table")
-    ap.add_argument("--out", default=str(DEFAULT_TABLE), help="output CSV path")
+    ap.add_argument("--nominal-radius-m", type=float, default=0.46,
+                    help="wheel radius at the tape circle [m] (default 0.46; the metro car: 0.42)")
+    ap.add_argument("--out", default=None, help="output CSV path (default: the stored table "
+                    "of that radius, data/S1002_UIC60_1in40_1435_r<mm>.csv)")
     args = ap.parse_args(argv)
-    table = derive_default()
+    stored_path = table_path(args.nominal_radius_m)
+    table = derive_default(args.nominal_radius_m)
     if args.check:
-        stored = ContactTable.from_csv(DEFAULT_TABLE)
+        stored = ContactTable.from_csv(stored_path)
         worst = max(float(np.nanmax(np.abs(stored.columns[c] - table.columns[c]))) for c in COLUMNS)
         print(f"max abs difference to the stored table: {worst:.3g}")
         print(summary(table))
         return 0 if worst < 1e-8 else 1
-    table.to_csv(args.out)
-    print(f"wrote {args.out}")
+    out = args.out or str(stored_path)
+    table.to_csv(out)
+    print(f"wrote {out}")
     print(summary(table))
     return 0
 

@@ -86,12 +86,22 @@ __all__ = [
     "DEFAULT_WHEEL",
     "DEFAULT_RAIL",
     "default_setup",
+    "table_path",
 ]
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 DEFAULT_WHEEL = DATA_DIR / "MBench_S1002_v3.prw"
 DEFAULT_RAIL = DATA_DIR / "MBench_UIC60_v3.prr"
 DEFAULT_TABLE = DATA_DIR / "S1002_UIC60_1in40_1435_r460.csv"
+
+
+def table_path(nominal_radius_m: float = 0.46) -> Path:
+    """Path of the shipped S1002 / UIC60 1:40 / 1435 mm table for wheels of ``nominal_radius_m``
+    (``data/S1002_UIC60_1in40_1435_r<radius in mm>.csv``; written by
+    ``python -m vehicle.wheelrail.derive_table --nominal-radius-m <r>``). It may not exist."""
+    mm = round(1000.0 * float(nominal_radius_m), 6)
+    label = f"{mm:g}".replace(".", "p")
+    return DATA_DIR / f"S1002_UIC60_1in40_1435_r{label}.csv"
 
 
 @dataclass(frozen=True)
