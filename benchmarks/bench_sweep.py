@@ -35,7 +35,7 @@ from cosim.scenario import load_scenario  # noqa: E402
 
 def short_twist(folder: Path) -> Path:
     data = yaml.safe_load((ROOT / "scenarios" / "twist_dqq.yaml").read_text())
-    data["vehicle"] = str(ROOT / "scenarios" / "params" / "metro_car.yaml")
+    data["vehicle"] = "paper_metro_car"
     data["k_W_per_K"] = [0]
     data["twist"].update(ramp_s=0.2, hold_s=0.2)
     data["solver"].update(jobs=1)

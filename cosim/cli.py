@@ -1,4 +1,4 @@
-"""Command line: ``pneumorail run | check | validate | verify | compare | sweep``.
+"""Command line: ``pneumorail run | check | validate | verify | compare | sweep | presets``.
 
 Exit codes: 0 success (for ``check``: every limit holds; for ``verify``: every estimated
 discretisation error within the scenario's ``verify.tolerance``; for ``sweep``: every case
@@ -70,6 +70,7 @@ examples:
   pneumorail run scenarios/curve_entry.yaml --k 0,inf --set curve.speed_m_per_s=12
   pneumorail check scenarios/twist_dqq.yaml --quiet             # CI gate; check.json, check.xml (JUnit)
   pneumorail validate scenarios/*.yaml                          # every check, no simulation
+  pneumorail presets metro_car_arb_dampers > mycar.yaml         # a car to start from (vehicle: mycar.yaml)
   pneumorail verify scenarios/curve_entry.yaml --k 0,inf        # halve every step twice: error estimates
   pneumorail sweep scenarios/curve_entry.yaml --grid curve.speed_m_per_s=8,10,12 --k 0,inf
   pneumorail compare results/twist_dqq results/twist_dqq_1a2b3c4d --wheels 1L,3R
@@ -98,6 +99,8 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("scenario", type=Path, help="scenario YAML file")
         scenario_options(s, "results/<scenario name>, plus a hash of --set/--k if given")
         s.add_argument("--overwrite", action="store_true", help="replace a previous run in the output folder")
+    r = sub.add_parser("presets", help="list the named parameter sets, or print one as a YAML file to start from")
+    r.add_argument("name", nargs="?", default=None, help="a preset name: print it (e.g. > mycar.yaml)")
     a = sub.add_parser("validate", help="check scenario or sweep files completely without running them (exit 0 or 2)")
     a.add_argument("scenarios", type=Path, nargs="+", help="scenario or sweep YAML files")
     a.add_argument("--k", type=_k_list, default=None, help="override the k values [W/K], e.g. 0,10,inf")
@@ -149,6 +152,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return EXIT_OK
         if args.command == "validate":
             return _validate(args)
+        if args.command == "presets":
+            return _presets(args)
         if args.command == "verify":
             return _verify(args)
         if args.command == "sweep":
@@ -252,6 +257,19 @@ def _load(args, path: Optional[Path] = None):
                                                   f"process (their cases take seconds)")
         scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=jobs))
     return scenario
+
+
+def _presets(args) -> int:
+    from .presets import PRESETS, preset_yaml, summary
+    if args.name is None:
+        for name, (section, _) in PRESETS.items():
+            print(f"{name:<24} {section:<8} {summary(name)}")
+        return EXIT_OK
+    if args.name not in PRESETS:
+        raise ScenarioError("<command line>", ["presets"], f"unknown preset {args.name!r} (expected one of "
+                                                            f"{', '.join(PRESETS)})")
+    print(preset_yaml(args.name), end="")
+    return EXIT_OK
 
 
 def _validate(args) -> int:

@@ -25,6 +25,7 @@ from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import COMPONENT_TYPES, Circuit, CircuitError
 from pneumatics.layouts import BELLOWS
 from pneumatics.pipe import Pipe
+from pneumatics.presets import CIRCUIT_PRESETS
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
 from vehicle.params import WHEELS, VehicleParams
 
@@ -32,6 +33,7 @@ from .checks import parse_checks
 from .experiments import (CAR_KINDS, KINDS, RIG_KINDS, RIG_TESTS, CarCircuit, CurveTest, RampTest, RigCircuit, Scenario,
                           SineTest, SolverSettings, TwistTest, VerifySettings)
 from .master import COUPLINGS
+from .presets import VEHICLE_PRESETS
 from .schema import MAX_SAMPLES, ScenarioError, build, check_keys, coerce, describe, k_values, require
 from .yaml_input import MAX_BYTES, parse_yaml, read_yaml
 
@@ -89,22 +91,24 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         got = "an empty document" if data is None else describe(data)
         raise ScenarioError(path, [], f"expected a mapping at the top level (kind: ..., k_W_per_K: ...), got {got}")
     if isinstance(data.get("vehicle"), str) and any(o.strip().startswith("vehicle.") for o in overrides):
-        data = {**data, "vehicle": {"file": data["vehicle"]}}  # a parameter file, then single fields on top
+        # a preset or a parameter file, then single fields on top
+        key = "preset" if data["vehicle"] in VEHICLE_PRESETS else "file"
+        data = {**data, "vehicle": {key: data["vehicle"]}}
     data = apply_overrides(data, overrides, path)
     kind = require(data, "kind", path, [], str)
     if kind not in KINDS:
         raise ScenarioError(path, ["kind"], f"unknown kind {kind!r} (expected one of {', '.join(KINDS)})")
     if kind in RIG_KINDS:
-        check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", "test"), path, [])
+        check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", "test", "allow"), path, [])
     else:
         experiment = "twist" if kind == "twist" else "curve"
         check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", experiment, "solver",
-                          "verify", "checks"), path, [])
+                          "verify", "checks", "allow"), path, [])
     ks = (k_values(list(k_override), path, ["--k"]) if k_override
           else k_values(require(data, "k_W_per_K", path, []), path, ["k_W_per_K"]))
     common = dict(file=path, kind=kind, name=_name(data, path), description=_description(data, path),
                   k_W_per_K=ks, content_sha256=hashlib.sha256(text.encode()).hexdigest(),
-                  overrides=tuple(overrides), raw=data)
+                  overrides=tuple(overrides), raw=data, allow=_allow(data.get("allow"), path))
     if kind in RIG_KINDS:
         rig = _rig_circuit(require(data, "circuit", path, [], dict), path)
         test = build(RIG_TESTS[kind], data.get("test"), path, ["test"])
@@ -134,6 +138,45 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     checks = parse_checks(data.get("checks", []), kind, path, ks, valve_settings)
     return Scenario(**common, files_sha256=_files_read(path, data), vehicle=vehicle, circuit=circuit, solver=solver,
                     verify=verify, checks=checks, **tests)
+
+
+def _allow(value, path) -> Tuple[str, ...]:
+    """``allow: [pipe_mach, ...]``: validity flags (cosim.validity.FLAGS) check accepts."""
+    from .validity import FLAGS
+    if value is None:
+        return ()
+    if not isinstance(value, list):
+        raise ScenarioError(path, ["allow"], f"expected a list of validity flags ({', '.join(FLAGS)}), got {describe(value)}")
+    for i, flag in enumerate(value):
+        if flag not in FLAGS:
+            raise ScenarioError(path, [f"allow[{i}]"], f"unknown validity flag {flag!r} (expected one of {', '.join(FLAGS)})")
+        if flag in value[:i]:
+            raise ScenarioError(path, [f"allow[{i}]"], f"{flag} listed twice")
+    return tuple(value)
+
+
+def _with_preset(data: Mapping, file, sections: Sequence[str]) -> Dict[str, Any]:
+    """``circuit: {preset: NAME, ...}``: the preset's bellow, tank and pipe (and, for a rig,
+    ``p0_Pa``) under what the scenario writes, field by field; ``tank: null`` stays null."""
+    if "preset" not in data:
+        return dict(data)
+    name = data["preset"]
+    if name not in CIRCUIT_PRESETS:
+        raise ScenarioError(file, ["circuit", "preset"], f"unknown circuit preset {name!r} "
+                                                         f"(expected one of {', '.join(CIRCUIT_PRESETS)})")
+    preset = CIRCUIT_PRESETS[name]()
+    merged = {k: v for k, v in data.items() if k != "preset"}
+    for key in sections:
+        base = getattr(preset, key)
+        if key == "p0_Pa":
+            merged.setdefault(key, base)
+            continue
+        given = merged.get(key, {})
+        if given is None or not isinstance(given, dict):
+            continue                              # null (no tank) or an error build() reports
+        fields = {k: v for k, v in dataclasses.asdict(base).items() if k not in ("a", "b", "p0_Pa", "T0_K")}
+        merged[key] = {**fields, **given}
+    return merged
 
 
 def _name(data: Mapping, path: Path) -> str:
@@ -344,7 +387,8 @@ def _optional(cls, data: Mapping, key: str, file, prefix, **fixed):
 
 
 def _rig_circuit(data: Mapping, file) -> RigCircuit:
-    check_keys(data, ("bellow", "tank", "pipe", "p0_Pa"), file, ["circuit"])
+    check_keys(data, ("preset", "bellow", "tank", "pipe", "p0_Pa"), file, ["circuit"])
+    data = _with_preset(data, file, ("bellow", "tank", "pipe", "p0_Pa"))
     bellow, tank, pipe = _chambers_and_pipe(data, file)
     p0 = coerce(require(data, "p0_Pa", file, ["circuit"]), float, file, ["circuit", "p0_Pa"])
     if not p0 > 0:
@@ -401,8 +445,10 @@ def _car_circuit(data: Mapping, file) -> CarCircuit:
         explicit = _explicit_components(data, file)
         return CarCircuit("explicit", Bellow(), None, Pipe("", ""), False, LevellingValve(""), None, Supply(), None,
                           tuple(explicit.items()))
-    keys = ("layout", "bellow", "tank", "pipe", "valves", "levelling_valve", "differential_valve", "supply", "cross_pipe")
+    keys = ("preset", "layout", "bellow", "tank", "pipe", "valves", "levelling_valve", "differential_valve", "supply",
+            "cross_pipe")
     check_keys(data, keys, file, ["circuit"])
+    data = _with_preset(data, file, ("bellow", "tank", "pipe"))
     layout = coerce(data.get("layout", "four_point"), str, file, ["circuit", "layout"])
     if layout not in LAYOUTS:
         raise ScenarioError(file, ["circuit", "layout"], f"expected one of {', '.join(LAYOUTS)}, got {layout!r}")
@@ -476,14 +522,27 @@ def _read_params(vpath: Path) -> Dict[str, Any]:
 
 
 def _vehicle(value, file) -> VehicleParams:
+    """``vehicle``: absent (the paper's car), a preset name, a parameter file, or a mapping of
+    fields on top of ``preset: NAME`` or ``file: PATH``."""
     if value is None:
         return VehicleParams()
     if isinstance(value, str):
+        if value in VEHICLE_PRESETS:
+            return VEHICLE_PRESETS[value]()
         vpath = _param_file(value, file, ["vehicle"])
         return build(VehicleParams, _read_params(vpath), vpath, [])
     if isinstance(value, dict):
         base = value.get("file")
         defaults: Dict[str, Any] = {}
+        if "preset" in value:
+            if base is not None:
+                raise ScenarioError(file, ["vehicle", "preset"], "give a preset or a file, not both")
+            name = value["preset"]
+            if name not in VEHICLE_PRESETS:
+                raise ScenarioError(file, ["vehicle", "preset"], f"unknown vehicle preset {name!r} "
+                                                                 f"(expected one of {', '.join(VEHICLE_PRESETS)})")
+            defaults = dataclasses.asdict(VEHICLE_PRESETS[name]())
+            value = {k: v for k, v in value.items() if k != "preset"}
         if base is not None:
             vpath = _param_file(coerce(base, str, file, ["vehicle", "file"]), file, ["vehicle", "file"])
             defaults = _read_params(vpath)

@@ -12,7 +12,7 @@ SCENARIOS = ROOT / "scenarios"
 def short_twist(**changes) -> dict:
     """The shipped twist scenario, shortened (1 s ramp, 1 s hold, k = 0 and inf, one process)."""
     data = yaml.safe_load((SCENARIOS / "twist_dqq.yaml").read_text())
-    data["vehicle"] = str(SCENARIOS / "params" / "metro_car.yaml")
+    data["vehicle"] = "paper_metro_car"
     data["k_W_per_K"] = [0, float("inf")]
     data["twist"].update(ramp_s=1.0, hold_s=1.0)
     data["solver"].update(jobs=1)
@@ -28,4 +28,12 @@ def short_twist(**changes) -> dict:
 def write_scenario(tmp_path: Path, data: dict, name: str = "scenario.yaml") -> Path:
     path = tmp_path / name
     path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def vehicle_file(folder: Path, preset: str = "paper_metro_car") -> Path:
+    """A vehicle parameter file written from a preset (``pneumorail presets NAME``)."""
+    from cosim.presets import preset_yaml
+    path = Path(folder) / f"{preset}.yaml"
+    path.write_text(preset_yaml(preset))
     return path

@@ -70,7 +70,7 @@ def test_window_drift_measures_the_trend_not_the_oscillation():
 # ----------------------------------------------------------------------------- check selectors
 def en_data(**twist) -> dict:
     data = yaml.safe_load((SCENARIOS / "twist_en14363.yaml").read_text())
-    data["vehicle"] = str(SCENARIOS / "params" / "metro_car.yaml")
+    data["vehicle"] = "paper_metro_car"
     data["twist"].update(twist)
     return data
 
@@ -130,7 +130,7 @@ def test_selectors_are_checked_against_the_scenario(tmp_path):
     assert info.value.path == "checks[0]" and "valves=on is not a valve setting of the scenario (off)" in info.value.reason
     # curve metrics have no wheel
     curve = yaml.safe_load((SCENARIOS / "curve_entry.yaml").read_text())
-    curve["vehicle"] = str(SCENARIOS / "params" / "metro_car.yaml")
+    curve["vehicle"] = "paper_metro_car"
     with pytest.raises(ScenarioError) as info:
         checks_of(tmp_path, ["roll_max_rad[1L] <= 0.05"], curve)
     assert info.value.path == "checks[0]" and "not a per-wheel metric" in info.value.reason
@@ -206,7 +206,7 @@ def test_twist_defaults_keep_the_papers_arrangement(tmp_path):
 
 def test_curve_window_must_lie_within_the_run(tmp_path):
     curve = yaml.safe_load((SCENARIOS / "curve_entry.yaml").read_text())
-    curve["vehicle"] = str(SCENARIOS / "params" / "metro_car.yaml")
+    curve["vehicle"] = "paper_metro_car"
     curve["curve"]["window_s"] = 31.0
     with pytest.raises(ScenarioError) as info:
         load(tmp_path, curve)

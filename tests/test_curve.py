@@ -16,7 +16,7 @@ from helpers import SCENARIOS, write_scenario
 
 def curve_scenario(tmp_path, k=(0.0,), **curve):
     data = yaml.safe_load((SCENARIOS / "curve_entry.yaml").read_text())
-    data["vehicle"] = str(SCENARIOS / "params" / "metro_car.yaml")
+    data["vehicle"] = "paper_metro_car"
     data["k_W_per_K"] = list(k)
     data["solver"]["jobs"] = 1
     data["curve"].update(curve)

@@ -18,13 +18,15 @@ from pathlib import Path
 from typing import Any, Callable, Dict, Optional, Sequence, Union
 
 import pytest
+import tempfile
+
 import yaml
 
 from cosim import cli
 from cosim.scenario import load_scenario
-from helpers import SCENARIOS, short_twist
+from helpers import SCENARIOS, short_twist, vehicle_file
 
-PARAMS = SCENARIOS / "params" / "metro_car.yaml"
+PARAMS = vehicle_file(tempfile.mkdtemp(prefix="pneumorail_params_"))   # a parameter file, as a user writes one
 INF, NAN = float("inf"), float("nan")
 DELETE = object()
 
@@ -173,8 +175,8 @@ DUPLICATES = {
     "the same k twice (--k)": Case("twist", "--k[2]", "twice", argv=["--k", "0,10,0"]),
     "the same k twice (--set)": Case("twist", "k_W_per_K[1]", "twice", argv=["--set", "k_W_per_K=[0, 0]"]),
     "duplicate top-level key": Case(None, "kind", "duplicate key", text=b"kind: twist\nkind: curve_entry\n"),
-    "duplicate nested key": Case("ramp", "circuit.pipe.zeta", "duplicate key (first at line", text=lambda t: t.replace(
-        "  pipe:\n", "  pipe:\n    zeta: 2.0\n", 1)),
+    "duplicate nested key": Case("ramp", "test.ramp_s", "duplicate key (first at line", text=lambda t: t.replace(
+        "test:\n", "test:\n  ramp_s: 2.0\n", 1)),
     "duplicate component name": Case("explicit", "circuit.components.FL", "duplicate key", text=lambda t: t.replace(
         "    FR:", "    FL:\n      type: bellow\n    FR:", 1)),
     "duplicate frequencies": Case("stiff", "test.frequencies_Hz[2]", "twice", {"test.frequencies_Hz": [1.0, 2.0, 1.0]}),

@@ -22,11 +22,10 @@ def test_run_json_records_resolved_parameters_and_file_hashes(tmp_path):
                  "--quiet", "--out", str(out)]) == 0
     info = _strict((out / "run.json").read_text())
     # files read, relative to the scenario file, with the hashes of their bytes
-    for rel in ("twist_dqq.yaml", "params/metro_car.yaml"):
-        assert info["files_sha256"][rel] == hashlib.sha256((SCENARIOS / rel).read_bytes()).hexdigest()
+    assert info["files_sha256"] == {"twist_dqq.yaml": hashlib.sha256((SCENARIOS / "twist_dqq.yaml").read_bytes()).hexdigest()}
     resolved = info["resolved"]
     assert resolved["vehicle"]["carbody_mass_kg"] == 16000.0                # the override
-    assert resolved["vehicle"]["bogie_mass_kg"] == 1900.0                   # from the parameter file
+    assert resolved["vehicle"]["bogie_mass_kg"] == 1900.0                   # from the preset paper_metro_car
     assert resolved["circuit_components"]["tank_FL"]["V_m3"] == 0.027       # a default actually used
     assert resolved["solver"]["macro_step_s"] > 0 and resolved["twist"]["hold_s"] == 0.5
     assert info["k_W_per_K"] == ["0", "inf"]

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 
 import pytest
 import yaml
@@ -9,7 +10,7 @@ import yaml
 from cosim import cli
 from cosim.scenario import load_scenario
 from cosim.schema import ScenarioError
-from helpers import SCENARIOS, short_twist, write_scenario
+from helpers import SCENARIOS, short_twist, vehicle_file, write_scenario
 
 RIG = yaml.safe_load((SCENARIOS / "rig_ramp.yaml").read_text())
 
@@ -20,7 +21,7 @@ def rig(**changes):
         node = data
         *parents, last = key.split(".")
         for p in parents:
-            node = node[p]
+            node = node.setdefault(p, {})
         if value is _DELETE:
             del node[last]
         else:
@@ -46,7 +47,8 @@ def test_shipped_scenarios_are_valid(name):
 
 
 def test_missing_key(tmp_path):
-    err = error_for(tmp_path, rig(**{"circuit.p0_Pa": _DELETE}))
+    # without the preset (which gives the rig's 4 bar) the initial pressure must be written
+    err = error_for(tmp_path, rig(**{"circuit.preset": _DELETE}))
     assert err.path == "circuit.p0_Pa" and "missing" in err.reason
 
 
@@ -120,7 +122,7 @@ def test_unknown_wheel_and_bad_check(tmp_path):
 
 
 def test_vehicle_parameter_error_names_the_parameter_file(tmp_path):
-    params = yaml.safe_load((SCENARIOS / "params" / "metro_car.yaml").read_text())
+    params = yaml.safe_load(vehicle_file(tmp_path).read_text())
     params["carbody_mass_kg"] = -17000
     (tmp_path / "car.yaml").write_text(yaml.safe_dump(params))
     path = write_scenario(tmp_path, short_twist(vehicle="car.yaml"))
@@ -166,13 +168,35 @@ def test_a_run_that_diverges_keeps_its_results_and_says_where(tmp_path, capsys):
 
 
 def test_inconsistent_car_parameters_are_bad_input(tmp_path):
-    err = error_for(tmp_path, short_twist(vehicle={"file": str(SCENARIOS / "params" / "metro_car.yaml"),
+    err = error_for(tmp_path, short_twist(vehicle={"preset": "paper_metro_car",
                                                    "airspring_upper_height_m": 0.5}))
     assert err.path == "vehicle" and "airspring_upper_height_m" in err.reason
 
 
+@pytest.mark.parametrize("name", ["paper_metro_car", "metro_car_arb_dampers"])
+def test_a_printed_vehicle_preset_loads_back_as_the_preset(tmp_path, name):
+    # pneumorail presets NAME > car.yaml gives a file that is the preset, field by field (exact:
+    # the YAML holds the literals)
+    from cosim.presets import VEHICLE_PRESETS
+    s = load_scenario(write_scenario(tmp_path, short_twist(vehicle=str(vehicle_file(tmp_path, name)))))
+    assert s.vehicle == VEHICLE_PRESETS[name]()
+
+
+def test_presets_resolve_and_overrides_apply_to_single_fields():
+    from cosim.presets import VEHICLE_PRESETS
+    s = load_scenario(SCENARIOS / "two_point_twist.yaml", ["vehicle.carbody_mass_kg=21000", "circuit.tank.V_m3=0.04"])
+    arb = VEHICLE_PRESETS["metro_car_arb_dampers"]()
+    assert s.vehicle == dataclasses.replace(arb, carbody_mass_kg=21000.0)
+    assert s.circuit.tank.V_m3 == 0.04 and s.circuit.bellow.V0_m3 == 0.012 and s.circuit.pipe.zeta == 1.11
+    with pytest.raises(ScenarioError, match="unknown circuit preset"):
+        load_scenario(SCENARIOS / "twist_dqq.yaml", ["circuit.preset=paper_table9"])
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(SCENARIOS / "twist_dqq.yaml", ["vehicle.preset=no_car"])
+    assert info.value.path == "vehicle.preset"
+
+
 def test_set_overrides_a_single_field_of_a_vehicle_parameter_file():
-    # the scenario names params/metro_car.yaml; --set vehicle.FIELD changes that field alone
+    # the scenario names the preset paper_metro_car; --set vehicle.FIELD changes that field alone
     base = load_scenario(SCENARIOS / "curve_entry.yaml")
     changed = load_scenario(SCENARIOS / "curve_entry.yaml", ["vehicle.carbody_cog_height_m=1.8"])
     assert changed.vehicle.carbody_cog_height_m == 1.8

@@ -25,7 +25,7 @@ def en_scenario(tmp_path, name="en.yaml", **changes):
     """The shipped EN 14363 twist (carbody + bogie twist), shortened: 1 s ramp, 1 s hold, 0.5 s
     final window, isothermal only, valves isolated, one process; ``changes``: twist keys."""
     data = yaml.safe_load((SCENARIOS / "twist_en14363.yaml").read_text())
-    data["vehicle"] = str(SCENARIOS / "params" / "metro_car.yaml")
+    data["vehicle"] = "paper_metro_car"
     data["k_W_per_K"] = [float("inf")]
     data["solver"]["jobs"] = 1
     data["twist"].update(ramp_s=1.0, hold_s=1.0, window_s=0.5, valve_settings=[False])

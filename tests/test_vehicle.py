@@ -10,12 +10,10 @@ only short runs are meaningful with held forces.
 import subprocess
 import sys
 from dataclasses import fields
-from pathlib import Path
 
 import exudyn
 import numpy as np
 import pytest
-import yaml
 
 from vehicle.car import BELLOWS, EXUDYN_TESTED_MINOR, WHEELS, MetroCar
 from vehicle.params import VehicleParams
@@ -24,7 +22,6 @@ P = VehicleParams()
 WEIGHT_N = (P.carbody_mass_kg + 2 * P.bogie_mass_kg + 4 * P.wheelset_mass_kg) * P.gravity_m_per_s2
 K_BELLOW_N_PER_M = 243e3  # paper Table 2, adiabatic bellow + tank quasi-static stiffness
 MACRO_S = 5e-3
-YAML_PATH = Path(__file__).resolve().parents[1] / "scenarios" / "params" / "metro_car.yaml"
 
 
 def index(name, names=WHEELS):
@@ -72,15 +69,6 @@ def test_vehicle_does_not_import_pneumatics_or_cosim():
             "bad = [m for m in sys.modules if m.split('.')[0] in ('pneumatics', 'cosim')]; "
             "assert not bad, bad")
     subprocess.run([sys.executable, "-c", code], check=True)
-
-
-def test_yaml_mirrors_the_dataclass_defaults():
-    data = yaml.safe_load(YAML_PATH.read_text())
-    names = [f.name for f in fields(VehicleParams)]
-    assert sorted(data) == sorted(names)
-    for name in names:
-        assert isinstance(data[name], (int, float)), f"{name} is not a number in the YAML"
-        assert data[name] == getattr(P, name), name  # same literal values: exact
 
 
 def test_params_fields_are_plain_numbers_with_units():

@@ -3,7 +3,8 @@
 The paper (Table 3) gives only the masses, the bogie centre distance and the wheelbase. Every
 other value is a documented default: the Manchester benchmark passenger vehicle (Iwnicki 1998,
 "The Manchester Benchmarks for Rail Vehicle Simulation") scaled to a metro car, or textbook
-reasoning. ``scenarios/params/metro_car.yaml`` mirrors these values with the same comments.
+reasoning. The comments next to the fields are part of the documentation: ``pneumorail presets
+paper_metro_car`` prints them with the values as a parameter file.
 
 Scaling rules used below (Manchester -> metro):
   * load ratio per axlebox: Manchester (32 000/2 + 2 615) kg, metro (17 000/2 + 1 900) kg
