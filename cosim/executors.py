@@ -25,7 +25,7 @@ from typing import Any, Callable, Iterable, Iterator, Optional, Sequence, Tuple
 
 Task = Tuple[str, Sequence[Any]]
 
-DASK_INSTALL_HINT = "pip install -e \".[dask]\" (or: pip install \"dask[distributed]\" xarray h5netcdf)"
+DASK_INSTALL_HINT = "pip install -e \".[dask]\" (or: pip install \"dask[distributed]\" h5netcdf)"
 
 
 class ExecutorUnavailable(RuntimeError):

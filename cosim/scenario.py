@@ -129,9 +129,16 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         tests = {"curve": _curve(data.get("curve"), vehicle, path)}
         duration = tests["curve"].duration_s
         valve_settings = tests["curve"].valve_settings
-    if circuit.explicit is not None and len(set(valve_settings)) > 1:
-        raise ScenarioError(path, [experiment, "valve_settings"], "an explicit circuit (circuit.components) has no "
-                                                                  "valves switch: give a single setting")
+    if circuit.explicit is not None:
+        # an explicit circuit has no valves switch: its valves are what its components are
+        given = (data.get(experiment) or {}).get("valve_settings")
+        if given is not None and tuple(valve_settings) != (circuit.valves,):
+            has = "has levelling valves" if circuit.valves else "has no levelling valve"
+            raise ScenarioError(path, [experiment, "valve_settings"], f"an explicit circuit (circuit.components) "
+                                                                      f"{has}: leave valve_settings out, or give "
+                                                                      f"[{str(circuit.valves).lower()}]")
+        valve_settings = (circuit.valves,)
+        tests = {name: dataclasses.replace(test, valve_settings=valve_settings) for name, test in tests.items()}
     _check_steps(solver, duration, path)
     _check_initial_state(circuit, car, ks, valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
@@ -443,7 +450,8 @@ def _car_circuit(data: Mapping, file) -> CarCircuit:
     if "components" in data:
         check_keys(data, ("components",), file, ["circuit"])
         explicit = _explicit_components(data, file)
-        return CarCircuit("explicit", Bellow(), None, Pipe("", ""), False, LevellingValve(""), None, Supply(), None,
+        has_valves = any(isinstance(c, LevellingValve) for c in explicit.values())   # the outputs' valves on/off
+        return CarCircuit("explicit", Bellow(), None, Pipe("", ""), has_valves, LevellingValve(""), None, Supply(), None,
                           tuple(explicit.items()))
     keys = ("preset", "layout", "bellow", "tank", "pipe", "valves", "levelling_valve", "differential_valve", "supply",
             "cross_pipe")

@@ -31,6 +31,17 @@ class ScenarioError(ValueError):
         self.reason = message
         super().__init__(f"{self.file}: {self.path}: {message}")
 
+    def __reduce__(self):
+        """Picklable (an error raised in a worker process reaches the user unchanged)."""
+        return _scenario_error, (self.file, self.path, self.reason)
+
+
+def _scenario_error(file: str, path: str, reason: str) -> "ScenarioError":
+    error = ScenarioError(file, [], reason)
+    error.path = path
+    error.args = (f"{error.file}: {path}: {reason}",)
+    return error
+
 
 # ----------------------------------------------------------------------------------- ranges
 class Range(NamedTuple):

@@ -80,6 +80,9 @@ class CircuitError(ValueError):
         self.reason = message
         super().__init__(f"{'.'.join(self.path)}: {message}")
 
+    def __reduce__(self):          # picklable: raised in worker processes
+        return type(self), (self.path, self.reason)
+
 
 class CircuitDiverged(RuntimeError):
     """Integration produced a non-physical state; carries where and when, for a diagnosis."""
@@ -88,6 +91,9 @@ class CircuitDiverged(RuntimeError):
         self.t_s, self.component, self.state, self.reason = t_s, component, dict(state), reason
         detail = ", ".join(f"{k}={v:.6g}" for k, v in self.state.items())
         super().__init__(f"pneumatic circuit diverged at t = {t_s:.6g} s in '{component}': {reason} ({detail})")
+
+    def __reduce__(self):          # picklable: raised in worker processes
+        return type(self), (self.t_s, self.component, self.state, self.reason)
 
 
 @dataclass(frozen=True)

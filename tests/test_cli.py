@@ -89,3 +89,35 @@ def test_a_run_outside_validity_is_flagged_and_fails_check(tmp_path, capsys):
 def test_every_curve_of_a_panel_looks_different():
     styles = [curve_style(i) for i in range(40)]
     assert len(set(styles)) == 40
+
+
+def test_errors_raised_in_workers_survive_pickling():
+    # a worker's exception crosses the process boundary by pickle: it must arrive as itself
+    import pickle
+    from cosim.schema import ScenarioError
+    from pneumatics.circuit import CircuitDiverged, CircuitError
+    for error in (ScenarioError("s.yaml", ["circuit", "tank", "V_m3"], "must be > 0"),
+                  CircuitError(["tank_FL", "p0_Pa"], "initial pressure is not set"),
+                  CircuitDiverged(1.5, "FL", {"m_kg": -1.0}, "mass is not finite and positive")):
+        copy = pickle.loads(pickle.dumps(error))
+        assert type(copy) is type(error) and str(copy) == str(error)
+        assert getattr(copy, "path", None) == getattr(error, "path", None)
+
+
+def test_allowed_validity_flags_do_not_fail_check():
+    import dataclasses
+    from cosim.outcome import Outcome
+    from cosim.scenario import load_scenario
+    s = load_scenario(SCENARIOS / "twist_dqq.yaml")
+    rows = [{"k_W_per_K": 0.0, "validity": "temperature"}]
+    assert Outcome(s, rows).validity_failures() == ["k = 0: temperature"]
+    assert not Outcome(s, rows).checks_hold()
+    allowed = dataclasses.replace(s, allow=("temperature",))
+    assert Outcome(allowed, rows).validity_failures() == []
+
+
+def test_an_explicit_circuits_valve_label_is_what_it_contains(tmp_path):
+    # the throttled-tank example has no levelling valve: its runs are labelled valves off
+    from cosim.scenario import load_scenario
+    s = load_scenario(SCENARIOS / "twist_throttled_tanks.yaml")
+    assert s.circuit.valves is False and s.twist.valve_settings == (False,)
