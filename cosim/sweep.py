@@ -309,9 +309,19 @@ def _one_process(scenario):
 
 # ------------------------------------------------------------------------------ one case
 def _run_scenario(scenario, out_dir: Path):
-    """Indirection for tests (a forked worker sees a monkeypatched replacement)."""
+    """Indirection for tests (a forked worker sees a monkeypatched replacement). A case's
+    warnings go to its run.json (and its rows' validity column), not between the sweep's
+    progress lines."""
+    import logging
+
     from .runner import run_scenario
-    return run_scenario(scenario, out_dir, Progress(scenario.name, quiet=True))
+    log = logging.getLogger("pneumorail")
+    was = log.disabled
+    log.disabled = True
+    try:
+        return run_scenario(scenario, out_dir, Progress(scenario.name, quiet=True))
+    finally:
+        log.disabled = was
 
 
 def run_case(scenario, case_dir: str, record: Dict[str, Any]) -> Dict[str, Any]:
@@ -392,8 +402,9 @@ class SweepOutcome:
         return all(self.status(c) == "ok" for c in self.prepared.cases)
 
     def check_failures(self) -> List[Tuple[Case, List[str]]]:
-        """Cases where a limit of the base scenario's ``checks:`` is violated, or that did not finish
-        (a diverged case fails every check; failed or pending cases cannot be checked)."""
+        """Cases where a limit of the base scenario's ``checks:`` is violated, a result is outside
+        the models' validity (unless the scenario allows it), or that did not finish (a diverged
+        case fails every check; failed or pending cases cannot be checked)."""
         from .outcome import Outcome
         bad = []
         for case in self.prepared.cases:
@@ -402,12 +413,13 @@ class SweepOutcome:
             if record is None or record["status"] == "failed":
                 bad.append((case, [f"not checked: {record['status'] if record else 'not run'}"]))
                 continue
-            outcome = Outcome(scenario, [], cases=_metrics_from_json(record["metrics"]))
+            outcome = Outcome(scenario, record["rows"], cases=_metrics_from_json(record["metrics"]))
             lines = []
             for check in scenario.checks:
                 value, where = outcome.check_value(check)
                 if math.isnan(value) or not check.holds(value):
                     lines.append(f"{check.text}: {value:.4g}" + (f" at {where}" if where else ""))
+            lines += [f"outside the model's validity: {f}" for f in outcome.validity_failures()]
             if lines:
                 bad.append((case, lines))
         return bad

@@ -72,8 +72,8 @@ def case_label(row: Mapping[str, object]) -> str:
     parts = []
     if "configuration" in row:
         parts.append(str(row["configuration"]))
-    if "valves" in row:
-        parts.append(f"valves {'on' if row['valves'] else 'off'}")
+    if "valves" in row:                      # a bool, or its text as read back from summary.csv
+        parts.append(f"valves {'on' if row['valves'] in (True, 'True', 'true') else 'off'}")
     if "k_W_per_K" in row:
         parts.append(f"k = {k_label(float(row['k_W_per_K']))}")
     if "frequency_Hz" in row:
