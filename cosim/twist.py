@@ -113,6 +113,10 @@ def twist_metrics(t_s: np.ndarray, dqq: np.ndarray, test: TwistTest, j: int) -> 
                               "t_dqq_max_s": float(t_s[worst[0]]),
                               "dqq_qs_max": float(qs.max()), "dqq_qs_max_wheel": WHEELS[int(np.argmax(qs))],
                               "dqq_drift": float(drift.max()), "settled": bool(drift.max() < test.settle_drift)}
+    if np.isnan(d).any():           # a diverged case: no maximum, so no wheel or time to name
+        row.update(dqq_max=math.nan, dqq_max_wheel="", t_dqq_max_s=math.nan)
+    if np.isnan(qs).any():
+        row.update(dqq_qs_max=math.nan, dqq_qs_max_wheel="")
     row.update({f"dqq_max_{w}": float(d[:, i].max()) for i, w in enumerate(WHEELS)})
     row.update({f"dqq_qs_{w}": float(qs[i]) for i, w in enumerate(WHEELS)})
     row.update({f"dqq_drift_{w}": float(drift[i]) for i, w in enumerate(WHEELS)})

@@ -262,3 +262,18 @@ def test_bogie_twist_alone_loads_the_wheels_through_the_primary_roll_stiffness(t
     # (0.24 against 70 MNm/rad: 0.3 %); the contact compliance in series (1 GN/m against
     # 0.68 MN/m: 0.1 %)
     assert np.allclose(qs[:, 0], sign * expected, rtol=0, atol=0.02 * expected), (qs[:, 0], expected)
+
+
+def test_a_diverged_case_names_no_worst_wheel(tmp_path):
+    # NaN from the divergence on: there is no maximum, so no wheel or time to name
+    from cosim.twist import twist_metrics
+    s = scenario(tmp_path)
+    t = np.linspace(0.0, 2.0, 201)
+    dqq = np.zeros((201, 8, 1))
+    dqq[:100, 2, 0] = 0.1
+    dqq[150:, :, 0] = np.nan
+    row = twist_metrics(t, dqq, s.twist, 0)
+    assert math.isnan(row["dqq_max"]) and row["dqq_max_wheel"] == "" and math.isnan(row["t_dqq_max_s"])
+    assert math.isnan(row["dqq_qs_max"]) and row["dqq_qs_max_wheel"] == ""
+    healthy = twist_metrics(t[:150], dqq[:150], s.twist, 0)
+    assert healthy["dqq_max"] == 0.1 and healthy["dqq_max_wheel"] == "2L"
