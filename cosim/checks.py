@@ -43,9 +43,13 @@ class Check:
 
 #: checkable metrics per scenario kind (each the largest over the selected cases)
 CHECK_METRICS = {"twist": ("dqq_max", "dqq_qs_max", "dqq_drift"),
-                 "curve_entry": ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}
+                 "curve_entry": ("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "yq_max", "sum_y_max",
+                                 "dqq_max")}
 #: metrics that can name a wheel (``dqq_max[3R]``): without one, the largest over the wheels
-WHEEL_METRICS = ("dqq_max", "dqq_qs_max", "dqq_drift")
+WHEEL_METRICS = ("dqq_max", "dqq_qs_max", "dqq_drift", "yq_max")
+#: curve_entry metrics of the lateral wheel-rail forces: they need ``curve.guidance: contact``
+#: (kinematic guidance has no lateral wheel-rail force: Y is NaN)
+CONTACT_METRICS = ("yq_max", "sum_y_max")
 _NUMBER = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?\d+)?"
 _CHECK = re.compile(r"^\s*([A-Za-z_]\w*)\s*((?:\[[^\[\]]*\]\s*)*)(<=|<|>=|>)\s*(" + _NUMBER + r")\s*$")
 _SELECTOR = re.compile(r"^\s*(?:(?P<wheel>[0-9]+[A-Za-z]+)|k\s*=\s*(?P<k>" + _NUMBER + r"|[-+]?\.?inf(?:inity)?)"
@@ -54,10 +58,12 @@ _SELECTOR = re.compile(r"^\s*(?:(?P<wheel>[0-9]+[A-Za-z]+)|k\s*=\s*(?P<k>" + _NU
 
 
 
-def parse_checks(value, kind, file, k_values: Sequence[float] = (), valve_settings: Sequence[bool] = ()) -> Tuple[Check, ...]:
+def parse_checks(value, kind, file, k_values: Sequence[float] = (), valve_settings: Sequence[bool] = (),
+                 guidance: Optional[str] = None) -> Tuple[Check, ...]:
     """``metric[selectors] op number``; selectors (comma-separated, in one or more brackets): a
     wheel (1L ... 4R, for the per-wheel metrics), ``k=<value>`` (one of the scenario's k values,
-    ``inf`` for isothermal) and ``valves=on|off`` (one of its valve settings)."""
+    ``inf`` for isothermal) and ``valves=on|off`` (one of its valve settings). ``guidance``: the
+    curve's (``kinematic`` refuses :data:`CONTACT_METRICS`)."""
     if not isinstance(value, list):
         raise ScenarioError(file, ["checks"], f"expected a list like ['dqq_max <= 0.6'], got {type(value).__name__}")
     out = []
@@ -71,6 +77,9 @@ def parse_checks(value, kind, file, k_values: Sequence[float] = (), valve_settin
         if metric not in CHECK_METRICS[kind]:
             raise ScenarioError(file, where, f"unknown metric {metric!r} for a {kind} scenario "
                                              f"(known: {', '.join(CHECK_METRICS[kind])})")
+        if kind == "curve_entry" and metric in CONTACT_METRICS and guidance != "contact":
+            raise ScenarioError(file, where, f"{metric} needs curve.guidance: contact (with {guidance or 'kinematic'} "
+                                             f"guidance no lateral wheel-rail force is computed)")
         chosen: Dict[str, Any] = {}
         items = [item for group in re.findall(r"\[([^\[\]]*)\]", selectors) for item in group.split(",")]
         for item in items:

@@ -1,5 +1,8 @@
-"""Safety criteria: wheel unloading ΔQ/Q0 (EN 14363); final-window statistics of time series."""
+"""Safety criteria: wheel unloading ΔQ/Q0 (EN 14363), Nadal's Y/Q and Prud'homme's ΣY limits,
+the EN 14363 2 m sliding mean; final-window statistics of time series."""
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -17,6 +20,69 @@ def static_wheel_loads(Q_level_N: np.ndarray) -> np.ndarray:
 def wheel_unloading(Q_N: np.ndarray, Q0_N: np.ndarray) -> np.ndarray:
     """ΔQ/Q0 = (Q0 - Q) / Q0: positive when the wheel unloads; 1 for a lifted wheel (Q = 0)."""
     return (Q0_N - Q_N) / Q0_N
+
+
+#: EN 14363: Y/Q and ΣY are assessed on their sliding mean over 2 m of track
+SLIDING_MEAN_M = 2.0
+
+
+def nadal_limit(flange_angle_deg: float = 70.0, friction: float = 0.36) -> float:
+    """Nadal's limit of the flanging wheel's Y/Q (Nadal 1908; EN 14363 and UIC 518 use its
+    value for γ = 70°, μ = 0.36):
+
+        (Y/Q)_lim = (tan γ - μ) / (1 + μ tan γ),
+
+    γ the flange angle, μ the friction coefficient at the flange contact. 70° and 0.36 give
+    1.2003 (EN 14363's 1.2)."""
+    tg = math.tan(math.radians(flange_angle_deg))
+    return (tg - friction) / (1.0 + friction * tg)
+
+
+def prudhomme_limit_N(Q0_N: float, alpha: float = 1.0) -> float:
+    """EN 14363's limit of the track shifting force (the 2 m sliding mean of ΣY, the sum of a
+    wheelset's lateral wheel forces), after Prud'homme (1967):
+
+        ΣY_lim = α (10 kN + 2 Q0 / 3)   [Q0 the static wheel load],
+
+    i.e. Prud'homme's α (10 + P/3) kN with P = 2 Q0 the static axle load in kN; α = 1 for
+    locomotives, power heads and passenger vehicles, 0.85 for freight wagons."""
+    return alpha * (10e3 + 2.0 * Q0_N / 3.0)
+
+
+def sliding_mean(t_s: np.ndarray, values: np.ndarray, window_s: float) -> np.ndarray:
+    """Trailing sliding mean over ``window_s``: m(t_i) = (1/W) ∫_{t_i - W}^{t_i} v dt for every
+    sample time t_i with a whole window behind it (t_i >= t_0 + W), NaN before. The samples
+    (``values``: samples first, any trailing shape) are joined linearly and the integral is exact
+    for that piecewise-linear signal (cumulative trapezoid, the window's start inside an interval
+    integrated exactly). EN 14363's 2 m sliding mean of Y/Q and ΣY at speed v is
+    ``sliding_mean(t, y, 2 / v)``. A NaN sample makes every window that holds it NaN."""
+    t = np.asarray(t_s, dtype=float)
+    v = np.asarray(values, dtype=float)
+    if not window_s > 0:
+        raise ValueError(f"window_s must be > 0, got {window_s}")
+    if t.ndim != 1 or v.shape[:1] != t.shape:
+        raise ValueError(f"expected samples first: t {t.shape}, values {v.shape}")
+    out = np.full(v.shape, np.nan)
+    if t.size < 2:
+        return out
+    h = np.diff(t).reshape((-1,) + (1,) * (v.ndim - 1))
+    bad = np.isnan(v)
+    v0 = np.where(bad, 0.0, v)
+    # integral from t_0 to each sample, and the number of intervals touching a NaN sample
+    cum = np.concatenate([np.zeros((1,) + v.shape[1:]), np.cumsum(0.5 * (v0[1:] + v0[:-1]) * h, axis=0)])
+    bad_cum = np.concatenate([np.zeros((1,) + v.shape[1:], dtype=int), np.cumsum(bad[1:] | bad[:-1], axis=0)])
+    full = np.flatnonzero(t >= t[0] + window_s - 1e-12 * max(1.0, abs(t[0])))
+    if full.size == 0:
+        return out
+    start = np.maximum(t[full] - window_s, t[0])
+    # interval [t_{j-1}, t_j] holding each window start; the integral from t_{j-1} to the start
+    j = np.clip(np.searchsorted(t, start, side="right"), 1, t.size - 1)
+    d = (start - t[j - 1]).reshape((-1,) + (1,) * (v.ndim - 1))
+    hj = (t[j] - t[j - 1]).reshape(d.shape)
+    partial = v0[j - 1] * d + (v0[j] - v0[j - 1]) * d * d / (2.0 * hj)
+    mean = (cum[full] - (cum[j - 1] + partial)) / window_s
+    out[full] = np.where(bad_cum[full] - bad_cum[j - 1] > 0, np.nan, mean)
+    return out
 
 
 def _span_mean(t: np.ndarray, v: np.ndarray, t0: float, t1: float) -> np.ndarray:

@@ -1,5 +1,8 @@
 """Curve entry (paper §4.2, Fig. 9, Table 4): carbody roll and air consumption across k, with the
-levelling and differential pressure valves disconnected and connected."""
+levelling and differential pressure valves disconnected and connected; with ``curve.guidance:
+contact`` also the wheel-rail forces and the running-safety quantities of EN 14363 (Y/Q against
+Nadal's limit, ΣY against Prud'homme's, wheel unloading ΔQ/Q0; docs/wheel_rail.md, "Curve runs
+with contact guidance")."""
 from __future__ import annotations
 
 import time
@@ -9,25 +12,73 @@ import numpy as np
 import xarray as xr
 
 from vehicle.car import MetroCar
-from vehicle.params import BELLOWS
+from vehicle.params import BELLOWS, WHEELS
 
 from .car_runs import bellow_panels, of_setting, per_case, simulate_cases
 from .checks import CaseMetrics
-from .criteria import window_mean
+from .criteria import (SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, static_wheel_loads,
+                       wheel_unloading, window_mean)
 from .experiments import CurveTest, Scenario
 from .outcome import Outcome, Runner, largest
 from .plots import Figure, Panel
 from .results import Progress
-from .series import with_column
+from .series import WHEELSETS, with_column
 
 #: components whose link flows are written to the time series
 VALVE_PREFIXES = ("lv_", "dpv_")
 
 
 def make_car(scenario: Scenario) -> MetroCar:
-    """The car running along the curve-entry track (picklable factory for cosim.car_runs)."""
-    return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, track=scenario.curve.track(),
-                    speed_m_per_s=scenario.curve.speed_m_per_s)
+    """The car running along the curve-entry track (picklable factory for cosim.car_runs), with
+    the curve's guidance, contact parameters and track irregularity (generated from its seed in
+    each worker: the same track in every one)."""
+    curve = scenario.curve
+    return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, track=curve.track(),
+                    speed_m_per_s=curve.speed_m_per_s, guidance=curve.guidance,
+                    contact=curve.contact_params() if curve.contact else None,
+                    irregularity=curve.track_irregularity(scenario.vehicle))
+
+
+def sliding_window_s(curve: CurveTest) -> float:
+    """EN 14363's 2 m sliding window as a time [s] at the curve's speed: 2 m / v."""
+    return SLIDING_MEAN_M / curve.speed_m_per_s
+
+
+def _over_time(da: xr.DataArray, fn) -> xr.DataArray:
+    """``fn(values)`` on ``da`` with time first, as a DataArray of the same dimensions."""
+    dims = ("time",) + tuple(d for d in da.dims if d != "time")
+    out = fn(da.transpose(*dims).values)
+    return xr.DataArray(out, dims=dims, coords={d: da[d] for d in dims if d in da.coords}).transpose(*da.dims)
+
+
+def _attrs(da: xr.DataArray, **attrs) -> xr.DataArray:
+    """``da`` with exactly ``attrs`` (arithmetic keeps an operand's, e.g. its CSV ``column``)."""
+    da = da.copy()
+    da.attrs = dict(attrs)
+    return da
+
+
+def wheel_rail_series(ds: xr.Dataset, curve: CurveTest) -> None:
+    """Add the running-safety series to a curve run's Dataset (in place): ``dqq`` (ΔQ/Q0 per
+    wheel, Q0 the static wheel load at t = 0, mean of the wheelset's two wheels, EN 14363) and,
+    with contact guidance, ``y_over_q`` (Y/Q per wheel; 0 on a wheel that carries nothing),
+    ``y_over_q_2m`` and ``sum_y_2m_N`` (their EN 14363 2 m sliding means, NaN for the first
+    2 m)."""
+    t = ds["time"].values
+    Q = ds["wheel_load_N"]
+    Q0 = _over_time(Q, lambda v: np.broadcast_to(static_wheel_loads(v[0]), v.shape))
+    ds["dqq"] = _attrs(wheel_unloading(Q, Q0), units="1", long_name="wheel unloading ΔQ/Q0 = (Q0 - Q)/Q0")
+    if "lateral_wheel_force_N" not in ds:
+        return
+    W = sliding_window_s(curve)
+    Y = ds["lateral_wheel_force_N"]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        yq = xr.where(Q > 0.0, Y / Q, xr.where(Q.isnull() | Y.isnull(), np.nan, 0.0))
+    ds["y_over_q"] = _attrs(yq, units="1", long_name="Y/Q per wheel")
+    ds["y_over_q_2m"] = with_column(_over_time(yq, lambda v: sliding_mean(t, v, W)), "YQ_2m_{}", "1",
+                                    f"Y/Q per wheel, EN 14363 sliding mean over {SLIDING_MEAN_M:g} m")
+    ds["sum_y_2m_N"] = with_column(_over_time(ds["wheelset_lateral_force_N"], lambda v: sliding_mean(t, v, W)),
+                                   "sumY_2m_{}_N", "N", f"ΣY per wheelset, EN 14363 sliding mean over {SLIDING_MEAN_M:g} m")
 
 
 def car_centre_s_m(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
@@ -58,6 +109,7 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
                                              "roll of the track plane at the car centre")
     ds["roll_rel_rad"] = with_column(ds["roll_rad"] - ds["roll_track_plane_rad"], "roll_carbody_rel_track_rad", "rad",
                                      "carbody roll relative to the track plane")
+    wheel_rail_series(ds, curve)
     if "link" in ds.dims:
         valves = [name for name in ds["link"].values if str(name).startswith(VALVE_PREFIXES)]
         ds["valve_flow_kg_per_s"] = with_column(ds["link_flow_kg_per_s"].sel(link=valves).rename(link="valve_link"),
@@ -66,25 +118,59 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
     return ds, diagnoses
 
 
+#: summary columns of the curve's headline metrics, contact guidance only
+CONTACT_COLUMNS = ("yq_max", "sum_y_max_N")
+
+
 def run(scenario: Scenario, progress: Progress) -> Outcome:
     """The curve entry: every case, its summary row (:func:`summary_row`) and checkable metrics."""
     t0 = time.perf_counter()
     curve = scenario.curve
     progress(f"curve entry at {curve.speed_m_per_s:g} m/s: {curve.straight_m:g} m straight, {curve.transition_m:g} m "
-             f"transition, R = {curve.radius_m:g} m; {len(scenario.k_W_per_K)} k values x valves {curve.valve_settings}")
+             f"transition, R = {curve.radius_m:g} m, {curve.guidance} guidance"
+             f"{', irregular track' if curve.irregularity else ''}; {len(scenario.k_W_per_K)} k values x valves "
+             f"{curve.valve_settings}")
     ds, diagnoses = simulate(scenario, progress)
     rows, cases = [], []
     for j in range(ds.sizes["case"]):
         case = ds.isel(case=j)
         row = summary_row(case, curve)
         rows.append(row)
-        cases.append(CaseMetrics(row["k_W_per_K"], row["valves"],
-                                 {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}))
-    metrics = {m: largest(r[m] for r in rows) for m in ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg",
-                                                        "air_exhausted_kg")} if rows else {}
+        cases.append(case_metrics(row))
+    headline = ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg", "dqq_max")
+    headline += CONTACT_COLUMNS if curve.contact else ()
+    metrics = {m: largest(r[m] for r in rows) for m in headline} if rows else {}
     shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg")
-    return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, [], {"window_s": curve.window},
+    if curve.contact:
+        shown += ("dqq_max",) + CONTACT_COLUMNS
+    info = {"window_s": curve.window, "guidance": curve.guidance}
+    if curve.contact:
+        info.update(sliding_mean_m=SLIDING_MEAN_M, yq_lim=rows[0]["yq_lim"] if rows else None,
+                    sum_y_lim_N=rows[0]["sum_y_lim_N"] if rows else None)
+    if curve.irregularity is not None:
+        info["irregularity"] = curve.track_irregularity(scenario.vehicle).source
+    return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, [], info,
                    time.perf_counter() - t0)
+
+
+def case_metrics(row: Dict[str, object]) -> CaseMetrics:
+    """The checkable metrics of a summary row (:data:`cosim.checks.CHECK_METRICS`): the wheel
+    metrics per wheel; ``yq_max`` and ``sum_y_max`` [N] only with contact guidance."""
+    values = {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}
+    wheels = {"dqq_max": {w: row[f"dqq_max_{w}"] for w in WHEELS}}
+    if "yq_max" in row:
+        values["sum_y_max"] = row["sum_y_max_N"]
+        wheels["yq_max"] = {w: row[f"yq_max_{w}"] for w in WHEELS}
+    return CaseMetrics(row["k_W_per_K"], row["valves"], values, wheels)
+
+
+def _largest_after(t: np.ndarray, values: np.ndarray, t_from: float) -> np.ndarray:
+    """Largest sample (over time, the first axis) from ``t_from`` on; NaN if one of them is NaN
+    (a diverged case) or there is none."""
+    keep = t >= t_from - 1e-9
+    if not keep.any():
+        return np.full(values.shape[1:], np.nan)
+    return values[keep].max(axis=0)
 
 
 def summary_row(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
@@ -119,6 +205,60 @@ def summary_row(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     m = case["total_mass_kg"].values
     row["mass_balance_error_kg"] = float(m[-1] - m[0] - case["air_from_supply_kg"].values[-1]
                                          + case["air_to_atmosphere_kg"].values[-1])
+    row.update(wheel_rail_summary(case, curve))
+    return row
+
+
+def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
+    """The running-safety columns of one case (``case``: the Dataset of :func:`simulate` at one
+    case, with :func:`wheel_rail_series`):
+
+    * ``dqq_max_<wheel>``, ``dqq_max``: the largest ΔQ/Q0 over the run (sampled values, no
+      filter), per wheel and over the wheels (both guidances; kinematic Q is vertical, contact Q
+      normal to the track plane);
+
+    with contact guidance also, the 2 m sliding means (EN 14363) counted from the first whole
+    window on:
+
+    * ``Y_max_<wheel>_N``, ``Y_max_N``: the largest Y (sampled, + towards the track centre);
+    * ``yq_max_<wheel>``, ``yq_max``: the largest (Y/Q)_2m, against ``yq_lim`` (Nadal,
+      :func:`cosim.criteria.nadal_limit`);
+    * ``sum_y_max_<wheelset>_N``, ``sum_y_max_N``: the largest |ΣY_2m| per wheelset and over
+      them, against ``sum_y_lim_N`` (Prud'homme as EN 14363 states it, Q0 the static wheel load;
+      :func:`cosim.criteria.prudhomme_limit_N`);
+    * ``y_ws_max_<wheelset>_m``, ``y_ws_rails_max_<wheelset>_m``, ``aoa_max_<wheelset>_rad``:
+      the largest |lateral displacement| from the design centre line and relative to the rails
+      (they differ by the alignment irregularity), and |angle of attack| per wheelset;
+    * ``flange_fraction_<wheel>``, ``flange_fraction``: the fraction of the samples a wheel is in
+      flange contact, and the largest over the wheels."""
+    t = case["time"].values
+    dqq = case["dqq"].transpose("time", "wheel").values
+    worst = dqq.max(axis=0)
+    row: Dict[str, object] = {f"dqq_max_{w}": float(v) for w, v in zip(WHEELS, worst)}
+    row["dqq_max"] = largest(worst)
+    if "y_over_q_2m" not in case:
+        return row
+    t_full = t[0] + sliding_window_s(curve)
+    Y = case["lateral_wheel_force_N"].transpose("time", "wheel").values
+    Y_max = Y.max(axis=0)
+    row.update({f"Y_max_{w}_N": float(v) for w, v in zip(WHEELS, Y_max)})
+    row["Y_max_N"] = largest(Y_max)
+    yq = _largest_after(t, case["y_over_q_2m"].transpose("time", "wheel").values, t_full)
+    row.update({f"yq_max_{w}": float(v) for w, v in zip(WHEELS, yq)})
+    row["yq_max"] = largest(yq)
+    row["yq_lim"] = nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction)
+    sum_y = _largest_after(t, np.abs(case["sum_y_2m_N"].transpose("time", "wheelset").values), t_full)
+    row.update({f"sum_y_max_{ws}_N": float(v) for ws, v in zip(WHEELSETS, sum_y)})
+    row["sum_y_max_N"] = largest(sum_y)
+    Q0 = float(np.mean(case["wheel_load_N"].isel(time=0).values))   # static, level track: every wheel
+    row["sum_y_lim_N"] = prudhomme_limit_N(Q0, curve.prudhomme_alpha)
+    for name, column in (("wheelset_lateral_m", "y_ws_max_{}_m"), ("wheelset_lateral_to_rails_m", "y_ws_rails_max_{}_m"),
+                         ("angle_of_attack_rad", "aoa_max_{}_rad")):
+        worst = np.abs(case[name].transpose("time", "wheelset").values).max(axis=0)
+        row.update({column.format(ws): float(v) for ws, v in zip(WHEELSETS, worst)})
+    flange = case["flange_contact"].transpose("time", "wheel").values.mean(axis=0)
+    row.update({f"flange_fraction_{w}": float(v) for w, v in zip(WHEELS, flange)})
+    row["flange_fraction"] = largest(flange)
     return row
 
 
@@ -146,6 +286,33 @@ def figures(outcome: Outcome) -> List[Figure]:
                                Panel(per_case(sub["air_to_atmosphere_kg"], 1e3), "time t [s]",
                                      "air exhausted to the atmosphere [g]")],
                               "Air consumption of the levelling valves (paper Table 4)", 2))
+    if outcome.scenario.curve.contact:
+        out += wheel_rail_figures(ds, outcome.scenario.curve, outcome.rows)
+    return out
+
+
+def wheel_rail_figures(ds: xr.Dataset, curve: CurveTest, rows: List[Dict[str, object]]) -> List[Figure]:
+    """Contact guidance, per valve setting: Y/Q (2 m sliding mean) per wheel across k with Nadal's
+    limit, ΔQ/Q0 per wheel across k, ΣY (2 m sliding mean) per wheelset with Prud'homme's limit."""
+    yq_lim, sum_y_lim = rows[0]["yq_lim"], rows[0]["sum_y_lim_N"]
+    nadal = [(yq_lim, f"Nadal limit {yq_lim:.2f} ({curve.nadal_flange_angle_deg:g}°, μ = {curve.nadal_friction:g})")]
+    prud = [(sign * sum_y_lim * 1e-3, f"{'+' if sign > 0 else '-'}Prud'homme limit {sum_y_lim * 1e-3:.1f} kN")
+            for sign in (1.0, -1.0)]
+    out = []
+    for valves in curve.valve_settings:
+        sub = of_setting(ds, valves)
+        tag = "on" if valves else "off"
+        yq = [Panel(per_case(sub["y_over_q_2m"].sel(wheel=w)), "time t [s]", f"(Y/Q)_2m, wheel {w}",
+                    f"wheel {w}", hlines=nadal) for w in WHEELS]
+        out.append(Figure(f"wheel_yq_valves={tag}.png", yq,
+                          f"Y/Q per wheel, {SLIDING_MEAN_M:g} m sliding mean (EN 14363), valves {tag}", 2))
+        dqq = [Panel(per_case(sub["dqq"].sel(wheel=w)), "time t [s]", f"ΔQ/Q0, wheel {w}", f"wheel {w}")
+               for w in WHEELS]
+        out.append(Figure(f"wheel_dqq_valves={tag}.png", dqq, f"Wheel unloading ΔQ/Q0 per wheel, valves {tag}", 2))
+        sum_y = [Panel(per_case(sub["sum_y_2m_N"].sel(wheelset=ws), 1e-3), "time t [s]", f"(ΣY)_2m [kN]",
+                       f"wheelset {ws}", hlines=prud) for ws in WHEELSETS]
+        out.append(Figure(f"wheelset_sum_y_valves={tag}.png", sum_y,
+                          f"ΣY per wheelset (+ left), {SLIDING_MEAN_M:g} m sliding mean, valves {tag}", 2))
     return out
 
 

@@ -6,6 +6,7 @@ or runs anything: :mod:`cosim.scenario` builds these from YAML and validates the
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, Optional, Tuple
@@ -16,7 +17,8 @@ from pneumatics.layouts import car_circuit
 from pneumatics.pipe import Pipe
 from pneumatics.rig import bellow_tank_components
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
-from vehicle.params import VehicleParams
+from vehicle.irregularities import TrackIrregularity
+from vehicle.params import ContactParams, VehicleParams
 from vehicle.track import TrackGeometry
 
 from .checks import Check
@@ -179,14 +181,68 @@ class VerifySettings:
     levels: int = 2
 
 
+#: wheelset guidance of a curve run (vehicle.car.MetroCar ``guidance``)
+GUIDANCE = ("kinematic", "contact")
+
+
+@dataclass(frozen=True)
+class IrregularitySpec:
+    """Track irregularities of a curve run (``curve.irregularity``): generated from a PSD
+    (``psd``: erri_b176_low | erri_b176_high | fra_1 ... fra_6, with ``seed``,
+    ``wavelength_range_m``, ``channels``, sample spacing ``ds_m``) from ``start_m`` (default: just
+    ahead of the front wheelset at t = 0, so the car starts on design track) to the end of the
+    track, faded in and out over ``taper_m``; or read from ``file`` (a CSV of
+    :meth:`vehicle.irregularities.TrackIrregularity.from_file`, path relative to the scenario;
+    ``s_m`` is the track's arc length, the values must be 0 under the car at t = 0). Each worker
+    generates the same track from the same seed (:mod:`vehicle.irregularities`)."""
+
+    psd: Optional[str] = None
+    seed: int = 0
+    wavelength_range_m: Tuple[float, ...] = (3.0, 150.0)
+    channels: Tuple[str, ...] = ("lateral", "vertical", "cross_level", "gauge")
+    ds_m: float = 0.25
+    start_m: Optional[float] = None
+    taper_m: float = 10.0
+    file: Optional[str] = None
+
+    def build(self, track_length_m: float, start_m: float) -> TrackIrregularity:
+        """The irregularity along a track of ``track_length_m`` [m]; ``start_m``: where a PSD
+        irregularity starts when ``self.start_m`` is None. ``file`` must be an absolute path
+        (:func:`cosim.scenario._curve` resolves it)."""
+        return _irregularity(self, float(track_length_m), float(start_m))
+
+
+@functools.lru_cache(maxsize=8)
+def _irregularity(spec: IrregularitySpec, track_length_m: float, start_m: float) -> TrackIrregularity:
+    if spec.file is not None:
+        return TrackIrregularity.from_file(spec.file)
+    start = spec.start_m if spec.start_m is not None else start_m
+    t = TrackIrregularity.from_psd(spec.psd, track_length_m - start, spec.ds_m, spec.seed,
+                                   wavelength_range_m=spec.wavelength_range_m, channels=spec.channels,
+                                   taper_m=spec.taper_m)
+    return TrackIrregularity(t.s_m + start, t.lateral_m, t.vertical_m, t.cross_level_m, t.gauge_m,
+                             source=f"{t.source}, from s = {start:g} m")
+
+
 @dataclass(frozen=True)
 class CurveTest:
-    """Curve entry (paper §4.2, Fig. 9): straight, clothoid transition, circular arc, at constant
-    speed. The car starts at rest relative to the straight (rear wheelset at s = 0), so
-    ``straight_m`` must hold the whole car. ``valve_settings``: runs with the levelling and
-    differential valves disconnected (false) and connected (true). ``window_s``: final window
-    over which the end values (roll, bellow crushing) are averaged (default 5 s, or the whole run
-    if shorter)."""
+    """Curve entry (paper §4.2, Fig. 9): straight, clothoid transition (curvature and cant ramp
+    linearly: on canted track a twisted transition), circular arc, at constant speed. The car starts
+    at rest relative to the straight (rear wheelset at s = 0), so ``straight_m`` must hold the
+    whole car. ``valve_settings``: runs with the levelling and differential valves disconnected
+    (false) and connected (true). ``window_s``: final window over which the end values (roll,
+    bellow crushing) are averaged (default 5 s, or the whole run if shorter). ``guidance``:
+    ``kinematic`` (default: wheelsets led along the track by a joint, no lateral wheel-rail
+    forces; the paper's results use it, and a run takes 1/3 to 1/4 of the time with ``contact``) or ``contact`` (free
+    wheelsets on the S1002/UIC60 contact with Kalker creep forces, docs/wheel_rail.md: adds Y,
+    Y/Q, ΣY, wheelset displacement, angle of attack, flange contact to the outputs and the checks
+    ``yq_max`` and ``sum_y_max``); ``friction_coefficient``: the contact model's μ (null: 0.36,
+    vehicle.params.ContactParams). Limits in the summary: Nadal (Y/Q)_lim = (tan γ - μ)/(1 + μ tan γ)
+    with ``nadal_flange_angle_deg`` γ and ``nadal_friction`` μ (70°, 0.36: 1.20), Prud'homme
+    ΣY_lim = α (10 kN + 2 Q0/3), α = ``prudhomme_alpha`` (EN 14363: 1, freight wagons 0.85).
+    ``irregularity``: null (design track) or {psd: erri_b176_low | erri_b176_high | fra_1 ...
+    fra_6, seed, wavelength_range_m: [3, 150], channels, ds_m, start_m, taper_m} or {file: path
+    relative to the scenario} (see IrregularitySpec in cosim/experiments.py)."""
 
     speed_m_per_s: float = 10.0
     straight_m: float = 20.0
@@ -198,15 +254,40 @@ class CurveTest:
     duration_s: float = 30.0
     valve_settings: Tuple[bool, ...] = (False, True)
     window_s: Optional[float] = None
+    guidance: str = "kinematic"
+    friction_coefficient: Optional[float] = None
+    nadal_flange_angle_deg: float = 70.0
+    nadal_friction: float = 0.36
+    prudhomme_alpha: float = 1.0
+    irregularity: Optional[IrregularitySpec] = None
 
     @property
     def window(self) -> float:
         """The final averaging window [s]."""
         return self.window_s if self.window_s is not None else min(DEFAULT_WINDOW_S, self.duration_s)
 
+    @property
+    def contact(self) -> bool:
+        """The wheelsets run on the wheel-rail contact (``guidance: contact``)."""
+        return self.guidance == "contact"
+
     def track(self) -> TrackGeometry:
         return TrackGeometry.curve_entry(self.straight_m, self.transition_m, self.radius_m, self.arc_m,
                                          cant_rad=self.cant_rad, direction=self.direction)
+
+    def contact_params(self) -> ContactParams:
+        """The contact model's parameters (defaults, with ``friction_coefficient`` if given)."""
+        if self.friction_coefficient is None:
+            return ContactParams()
+        return ContactParams(friction_coefficient=self.friction_coefficient)
+
+    def track_irregularity(self, vehicle: VehicleParams) -> Optional[TrackIrregularity]:
+        """The irregularity along :meth:`track` (None: design track); a PSD irregularity starts
+        by default 1 m ahead of the front wheelset's position at t = 0."""
+        if self.irregularity is None:
+            return None
+        front = vehicle.bogie_centre_distance_m + vehicle.wheelbase_m
+        return self.irregularity.build(self.track().total_length_m, front + 1.0)
 
 
 # ----------------------------------------------------------------------------------- circuits

@@ -18,7 +18,7 @@ from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve, SafetyValve
 from vehicle.params import VehicleParams
 
-from .experiments import (CurveTest, QuasiStaticTest, RampTest, SineTest, SolverSettings, StiffnessTest, TwistTest,
+from .experiments import (CurveTest, IrregularitySpec, QuasiStaticTest, RampTest, SineTest, SolverSettings, StiffnessTest, TwistTest,
                        VerifySettings)
 from .schema import _type_name
 
@@ -27,6 +27,7 @@ from .schema import _type_name
 SECTIONS = (
     ("twist", TwistTest, "kind: twist"),
     ("curve", CurveTest, "kind: curve_entry"),
+    ("curve.irregularity", IrregularitySpec, "kind: curve_entry; null = none"),
     ("solver", SolverSettings, "twist and curve_entry"),
     ("verify", VerifySettings, "twist and curve_entry: `pneumorail verify`"),
     ("test", RampTest, "kind: rig_ramp"),

@@ -83,9 +83,29 @@ class Record:
     valve_exhaust_air_kg: List[np.ndarray] = field(default_factory=list)  # (valves, cases) cumulative
     valve_supply_open_s: List[np.ndarray] = field(default_factory=list)   # (valves, cases) cumulative
     valve_exhaust_open_s: List[np.ndarray] = field(default_factory=list)  # (valves, cases) cumulative
+    # wheel-rail outputs, sampled only when the cars run on the wheel-rail contact
+    # (guidance="contact", :data:`CONTACT_FIELDS`); empty otherwise
+    lateral_wheel_force_N: List[np.ndarray] = field(default_factory=list)     # (8, cases) Y, + towards the track centre
+    wheelset_lateral_force_N: List[np.ndarray] = field(default_factory=list)  # (4, cases) ΣY, + left
+    wheelset_lateral_m: List[np.ndarray] = field(default_factory=list)        # (4, cases) + left
+    wheelset_lateral_to_rails_m: List[np.ndarray] = field(default_factory=list)  # (4, cases) + left
+    angle_of_attack_rad: List[np.ndarray] = field(default_factory=list)       # (4, cases)
+    flange_contact: List[np.ndarray] = field(default_factory=list)            # (8, cases) 1 / 0
 
     def arrays(self) -> Dict[str, np.ndarray]:
-        return {name: np.asarray(values) for name, values in vars(self).items()}
+        """Every sampled output as an array (samples, ..., cases); the wheel-rail outputs only
+        when they were sampled."""
+        return {name: np.asarray(values) for name, values in vars(self).items()
+                if values or name not in CONTACT_FIELDS}
+
+
+#: Record entries of the wheel-rail contact -> (the MetroCar output each samples, its length)
+CONTACT_FIELDS = {"lateral_wheel_force_N": (lambda car: car.lateral_wheel_forces_N(), 8),
+                  "wheelset_lateral_force_N": (lambda car: car.wheelset_lateral_forces_N(), 4),
+                  "wheelset_lateral_m": (lambda car: car.wheelset_lateral_displacement_m(), 4),
+                  "wheelset_lateral_to_rails_m": (lambda car: car.contact_state().lateral_to_rails_m, 4),
+                  "angle_of_attack_rad": (lambda car: car.angle_of_attack_rad(), 4),
+                  "flange_contact": (lambda car: car.flange_contact(), 8)}
 
 
 class CoSimulation:
@@ -112,6 +132,8 @@ class CoSimulation:
         self._supply = "supply" in circuit.node_names
         self._bellow_chambers = [circuit.chamber_names.index(b) for b in circuit.bellow_names]
         self._F_end = None  # bellow forces the cars feel at the end of the last step (4, cases)
+        #: the cars run on the wheel-rail contact: :meth:`sample` records its outputs too
+        self.contact = any(getattr(car, "guidance", "kinematic") == "contact" for car in self.cars)
 
     def _crushing(self):
         zs, zds = [], []
@@ -211,6 +233,11 @@ class CoSimulation:
         record.valve_exhaust_air_kg.append(live(air.exhaust))
         record.valve_supply_open_s.append(live(open_s.supply))
         record.valve_exhaust_open_s.append(live(open_s.exhaust))
+        if self.contact:
+            for name, (output, n) in CONTACT_FIELDS.items():
+                getattr(record, name).append(live(np.stack(
+                    [np.asarray(output(car), dtype=float) if a else np.zeros(n)
+                     for car, a in zip(self.cars, self.active)], axis=1)))
 
     def run(self, t_end_s: float, output_interval_s: float,
             progress: Optional[Callable[[str, bool], None]] = None) -> tuple[Record, Optional[str]]:

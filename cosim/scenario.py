@@ -20,6 +20,8 @@ import hashlib
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
+import numpy as np
+
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import COMPONENT_TYPES, Circuit, CircuitError
@@ -142,7 +144,8 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     _check_steps(solver, duration, path)
     _check_initial_state(circuit, car, ks, valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
-    checks = parse_checks(data.get("checks", []), kind, path, ks, valve_settings)
+    checks = parse_checks(data.get("checks", []), kind, path, ks, valve_settings,
+                          guidance=tests["curve"].guidance if kind == "curve_entry" else None)
     return Scenario(**common, files_sha256=_files_read(path, data), vehicle=vehicle, circuit=circuit, solver=solver,
                     verify=verify, checks=checks, **tests)
 
@@ -247,11 +250,14 @@ def _check_rig_test(test, rig: RigCircuit, path) -> None:
 
 
 def _files_read(path: Path, data: Mapping) -> Tuple[Tuple[str, str], ...]:
-    """(path relative to the scenario file, sha256) of the scenario and the vehicle parameter file
-    (called once both have been read and validated)."""
+    """(path relative to the scenario file, sha256) of every file the scenario reads: itself, the
+    vehicle parameter file, the track irregularity file (called once they have been validated)."""
     vehicle = data.get("vehicle")
     vehicle = vehicle.get("file") if isinstance(vehicle, dict) else vehicle
-    files = [path] + ([path.parent / vehicle] if isinstance(vehicle, str) else [])
+    files = [path] + ([path.parent / vehicle] if isinstance(vehicle, str) and vehicle not in VEHICLE_PRESETS else [])
+    irregularity = (data.get("curve") or {}).get("irregularity")
+    if isinstance(irregularity, dict) and isinstance(irregularity.get("file"), str):
+        files.append(path.parent / irregularity["file"])
     return tuple((str(f.relative_to(path.parent)) if f.is_relative_to(path.parent) else str(f),
                   hashlib.sha256(f.read_bytes()).hexdigest())
                  for f in files if f.is_file() and f.stat().st_size <= MAX_BYTES)
@@ -340,6 +346,10 @@ def _valve_settings(settings, path, where) -> None:
 
 
 def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
+    irregularity = None
+    if isinstance(data, Mapping) and "irregularity" in data:
+        irregularity = data["irregularity"]
+        data = {k: v for k, v in data.items() if k != "irregularity"}
     curve = build(CurveTest, data, path, ["curve"])
     if curve.direction not in (1, -1):
         raise ScenarioError(path, ["curve", "direction"], f"expected 1 (left) or -1 (right), got {curve.direction}")
@@ -355,11 +365,102 @@ def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
     if curve.duration_s > on_track:
         raise ScenarioError(path, ["curve", "duration_s"], f"the front wheelset leaves the track at t = {on_track:.3g} s; "
                                                            f"lengthen arc_m or shorten duration_s (got {curve.duration_s:g} s)")
+    _curve_contact(curve, path)
     try:
         curve.track()
     except ValueError as exc:
         raise ScenarioError(path, ["curve"], f"the track cannot be built: {exc}") from None
+    if irregularity is not None:
+        curve = dataclasses.replace(curve, irregularity=_irregularity(irregularity, curve, vehicle, path))
     return curve
+
+
+def _curve_contact(curve: CurveTest, path) -> None:
+    """The guidance, the contact model's friction and the limits' parameters of a curve."""
+    from .criteria import nadal_limit
+    from .experiments import GUIDANCE
+    if curve.guidance not in GUIDANCE:
+        raise ScenarioError(path, ["curve", "guidance"], f"expected one of {', '.join(GUIDANCE)}, got {curve.guidance!r}")
+    mu = curve.friction_coefficient
+    if mu is not None and not 0.0 < mu <= 1.0:
+        raise ScenarioError(path, ["curve", "friction_coefficient"], f"expected a wheel-rail friction coefficient in "
+                                                                     f"(0, 1] (dry rail 0.3-0.5), got {mu:g}")
+    if mu is not None and not curve.contact:
+        raise ScenarioError(path, ["curve", "friction_coefficient"], "the contact model's friction needs "
+                                                                     "curve.guidance: contact")
+    if not 0.0 < curve.nadal_flange_angle_deg < 90.0:
+        raise ScenarioError(path, ["curve", "nadal_flange_angle_deg"], f"expected a flange angle in (0, 90) degrees, "
+                                                                       f"got {curve.nadal_flange_angle_deg:g}")
+    if not 0.0 <= curve.nadal_friction <= 1.0:
+        raise ScenarioError(path, ["curve", "nadal_friction"], f"expected a friction coefficient in [0, 1], "
+                                                               f"got {curve.nadal_friction:g}")
+    if not nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction) > 0.0:
+        raise ScenarioError(path, ["curve", "nadal_friction"], f"the Nadal limit (tan g - mu)/(1 + mu tan g) must be "
+                                                               f"> 0: mu = {curve.nadal_friction:g} is not below tan "
+                                                               f"{curve.nadal_flange_angle_deg:g} deg")
+    if not 0.0 < curve.prudhomme_alpha <= 1.0:
+        raise ScenarioError(path, ["curve", "prudhomme_alpha"], f"expected a factor in (0, 1] (EN 14363: 1, freight "
+                                                                f"wagons 0.85), got {curve.prudhomme_alpha:g}")
+
+
+def _irregularity(value, curve: CurveTest, vehicle: VehicleParams, path):
+    """``curve.irregularity``: null, {psd: KIND, seed, ...} or {file: PATH}; generated (or read)
+    once here, so that a bad one fails before any run."""
+    from vehicle.irregularities import CHANNELS, canonical_kind
+    from .experiments import IrregularitySpec
+    where = ["curve", "irregularity"]
+    if not isinstance(value, Mapping):
+        raise ScenarioError(path, where, f"expected null, {{psd: erri_b176_low, seed: 1}} or {{file: irregularity.csv}}, "
+                                         f"got {describe(value)}")
+    spec = build(IrregularitySpec, value, path, where)
+    if (spec.psd is None) == (spec.file is None):
+        raise ScenarioError(path, where, "give either psd (with a seed) or file, not " + ("both" if spec.psd else "neither"))
+    if spec.file is not None:
+        others = [k for k in value if k != "file"]
+        if others:
+            raise ScenarioError(path, [*where, others[0]], "a file irregularity takes no other keys (the file gives "
+                                                           "s_m and the values)")
+        fpath = Path(path).parent / spec.file
+        if not fpath.is_file():
+            raise ScenarioError(path, [*where, "file"], f"the irregularity file {str(fpath)!r} does not exist or is not a file")
+        spec = dataclasses.replace(spec, file=str(fpath.resolve()))
+    else:
+        try:
+            spec = dataclasses.replace(spec, psd=canonical_kind(spec.psd))
+        except ValueError as exc:
+            raise ScenarioError(path, [*where, "psd"], str(exc)) from None
+        if spec.seed < 0:
+            raise ScenarioError(path, [*where, "seed"], f"expected an integer >= 0, got {spec.seed}")
+        band = spec.wavelength_range_m
+        if len(band) != 2 or not 0.0 < band[0] < band[1]:
+            raise ScenarioError(path, [*where, "wavelength_range_m"], f"expected [shortest, longest] wavelength in m, "
+                                                                      f"0 < shortest < longest, got {list(band)}")
+        for i, c in enumerate(spec.channels):
+            if c not in CHANNELS or c in spec.channels[:i]:
+                raise ScenarioError(path, [*where, f"channels[{i}]"], f"expected each of {', '.join(CHANNELS)} at most "
+                                                                      f"once, got {c!r}")
+        if not spec.ds_m <= 0.5 * band[0]:
+            raise ScenarioError(path, [*where, "ds_m"], f"the spacing must be at most half the shortest wavelength "
+                                                        f"({0.5 * band[0]:g} m), got {spec.ds_m:g} m")
+        length = curve.track().total_length_m
+        start = spec.start_m
+        if start is not None and not 0.0 <= start < length:
+            raise ScenarioError(path, [*where, "start_m"], f"expected a position on the track, [0, {length:g}) m, "
+                                                           f"got {start:g} m")
+    try:
+        irr = dataclasses.replace(curve, irregularity=spec).track_irregularity(vehicle)
+    except ValueError as exc:
+        key = "file" if spec.file is not None else "taper_m" if "taper_m" in str(exc) else "psd"
+        raise ScenarioError(path, [*where, key], f"cannot build the irregularity: {exc}") from None
+    # the car starts in static equilibrium on design track: nothing under it at t = 0
+    car_length = vehicle.bogie_centre_distance_m + vehicle.wheelbase_m
+    s = np.linspace(0.0, car_length, 241)
+    worst = max(float(np.abs(v).max()) for v in irr(s))
+    if worst > 1e-6:
+        raise ScenarioError(path, [*where, "file" if spec.file is not None else "start_m"],
+                            f"the irregularity must be 0 under the car at t = 0 (s = 0 ... {car_length:g} m, the "
+                            f"rear wheelset at s = 0); it reaches {worst * 1e3:.3g} mm there")
+    return spec
 
 
 def _chambers_and_pipe(data: Mapping, file):

@@ -34,7 +34,21 @@ CAR_VARIABLES = {
     "valve_exhaust_air_kg": (("valve",), "kg", "air through each levelling valve's exhaust side (cumulative)", None),
     "valve_supply_open_s": (("valve",), "s", "time each levelling valve's supply side was open (cumulative)", None),
     "valve_exhaust_open_s": (("valve",), "s", "time each levelling valve's exhaust side was open (cumulative)", None),
+    # wheel-rail contact (guidance: contact only; a kinematic run has none of them)
+    "lateral_wheel_force_N": (("wheel",), "N", "lateral wheel-rail force Y (+ towards the track centre)", "Y_{}_N"),
+    "wheelset_lateral_force_N": (("wheelset",), "N", "sum of the lateral wheel forces of a wheelset, ΣY (+ left)",
+                                 "sumY_{}_N"),
+    "wheelset_lateral_m": (("wheelset",), "m", "wheelset lateral displacement from the design centre line (+ left)",
+                           "y_ws_{}_m"),
+    "wheelset_lateral_to_rails_m": (("wheelset",), "m", "wheelset lateral displacement relative to its rails "
+                                    "(+ left; track irregularities subtracted)", "y_ws_rails_{}_m"),
+    "angle_of_attack_rad": (("wheelset",), "rad", "wheelset angle of attack (yaw to the track tangent, + to the left)",
+                            "aoa_{}_rad"),
+    "flange_contact": (("wheel",), "1", "flange contact (1: contact angle above the flange threshold)", "flange_{}"),
 }
+
+#: wheelsets, 1 ... 4 from the front
+WHEELSETS = ("1", "2", "3", "4")
 
 
 def case_name(k: float, valves: Optional[bool]) -> str:
@@ -48,7 +62,8 @@ def car_dataset(arrays: Dict[str, np.ndarray], ks: Sequence[float], valves: bool
     """A car record (:meth:`cosim.master.Record.arrays`: arrays (samples, ..., cases)) as a
     Dataset. ``valves``: the valve setting of every case; ``named``: the case names carry it
     (a scenario with several settings)."""
-    labels = {"wheel": list(WHEELS), "bellow": list(BELLOWS), "link": list(links), "valve": list(valve_names)}
+    labels = {"wheel": list(WHEELS), "wheelset": list(WHEELSETS), "bellow": list(BELLOWS), "link": list(links),
+              "valve": list(valve_names)}
     data = {}
     for name, (dims, units, long_name, column) in CAR_VARIABLES.items():
         if name not in arrays:
