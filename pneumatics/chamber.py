@@ -6,7 +6,9 @@ chambers along the first axis and, optionally, independent cases along a trailin
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
+from typing import Optional, Tuple
+
+import numpy as np
 
 
 
@@ -17,6 +19,11 @@ class Bellow:
     z is positive in compression (docs/models.md): V = V0 - (dV/dz) z, A_e = A0 + (dA/dz) z.
     Defaults are the paper's Table 1 (its "volume gradient 0.13 m^2" equals the effective area).
     ``p0_Pa`` None means the user of the circuit sets it (e.g. from the static load).
+
+    A measured effective area replaces the linear law when given as a table of crushing
+    (``area_table_z_m``, increasing) and area (``area_table_m2``): A_e(z) interpolated linearly
+    between the points and held at the end values beyond them (``A0_m2``, ``dA_dz_m`` are then
+    not used). Manufacturers give A_e against height; crushing is nominal height minus height.
     """
 
     V0_m3: float = 0.012
@@ -25,12 +32,28 @@ class Bellow:
     dA_dz_m: float = 0.0
     p0_Pa: Optional[float] = None
     T0_K: Optional[float] = None
+    area_table_z_m: Tuple[float, ...] = ()
+    area_table_m2: Tuple[float, ...] = ()
 
     def volume_m3(self, z_m):
         return self.V0_m3 - self.dV_dz_m2 * z_m
 
     def area_m2(self, z_m):
+        """Effective area A_e(z) [m^2]."""
+        if self.area_table_z_m:
+            return np.interp(z_m, self.area_table_z_m, self.area_table_m2)
         return self.A0_m2 + self.dA_dz_m * z_m
+
+    def area_slope_m(self, z_m):
+        """dA_e/dz [m]: ``dA_dz_m``, or the slope of the table's interval at z (0 beyond its ends,
+        where the area is held)."""
+        if not self.area_table_z_m:
+            return self.dA_dz_m
+        zs, As = np.asarray(self.area_table_z_m), np.asarray(self.area_table_m2)
+        slopes = np.diff(As) / np.diff(zs)
+        z = np.asarray(z_m, float)
+        i = np.clip(np.searchsorted(zs, z, side="right") - 1, 0, len(slopes) - 1)
+        return np.where((z < zs[0]) | (z > zs[-1]), 0.0, slopes[i])
 
 
 @dataclass(frozen=True)
@@ -81,7 +104,8 @@ def bellow_stiffness_N_per_m(bellow: Bellow, z_m, p_Pa, p_atm_Pa, polytropic_ind
     this is the paper's gamma A^2 p0 / V (adiabatic) or A^2 p0 / V (isothermal), §1 and Table 2.
     """
     V = bellow.volume_m3(z_m)
-    return bellow.dA_dz_m * (p_Pa - p_atm_Pa) + bellow.area_m2(z_m) * polytropic_index * p_Pa * bellow.dV_dz_m2 / V
+    return (bellow.area_slope_m(z_m) * (p_Pa - p_atm_Pa)
+            + bellow.area_m2(z_m) * polytropic_index * p_Pa * bellow.dV_dz_m2 / V)
 
 
 def quasi_static_stiffness_N_per_m(bellow: Bellow, p0_Pa, V_m3, polytropic_index):

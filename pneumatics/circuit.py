@@ -84,6 +84,24 @@ class CircuitError(ValueError):
         return type(self), (self.path, self.reason)
 
 
+def _check_area_table(name: str, bellow: Bellow) -> None:
+    """A bellow's area table: as many areas as crushings, at least two, crushings increasing,
+    areas > 0 and finite."""
+    zs, As = bellow.area_table_z_m, bellow.area_table_m2
+    if not zs and not As:
+        return
+    if len(zs) != len(As) or len(zs) < 2:
+        raise CircuitError([name, "area_table_m2"], f"expected as many areas as crushings (area_table_z_m), at "
+                                                    f"least 2; got {len(As)} areas for {len(zs)} crushings")
+    for i in range(len(zs)):
+        if not (np.isfinite(zs[i]) and np.isfinite(As[i]) and As[i] > 0):
+            raise CircuitError([name, f"area_table_m2[{i}]"], f"expected a finite area > 0 m^2 at a finite "
+                                                               f"crushing, got {As[i]} at {zs[i]} m")
+        if i and not zs[i] > zs[i - 1]:
+            raise CircuitError([name, f"area_table_z_m[{i}]"], f"crushings must increase, got {zs[i]} after "
+                                                               f"{zs[i - 1]} m")
+
+
 class CircuitDiverged(RuntimeError):
     """Integration produced a non-physical state; carries where and when, for a diagnosis."""
 
@@ -262,6 +280,10 @@ class Circuit:
             self._Ez[self.chamber_names.index(n), j] = self.components[n].dV_dz_m2
         self._A0 = _column([self.components[n].A0_m2 for n in self.bellow_names])
         self._dAdz = _column([self.components[n].dA_dz_m for n in self.bellow_names])
+        for n in self.bellow_names:
+            _check_area_table(n, self.components[n])
+        #: bellows with a tabulated effective area (their laws are evaluated bellow by bellow)
+        self._area_tables = any(self.components[n].area_table_z_m for n in self.bellow_names)
         self._bellow_chamber = np.array([self.chamber_names.index(n) for n in self.bellow_names], dtype=int)
         # every bellow at once: a Bellow whose fields are (bellows, 1) columns, for the vectorised laws
         self._bellow_columns = Bellow(**{f: _column([getattr(self.components[n], f) for n in self.bellow_names])
@@ -639,7 +661,11 @@ class Circuit:
         z = np.asarray(z_m, float)
         x2 = x.reshape(self.layout.size, -1)
         z2 = self._per_bellow(z, x2)
-        F = bellow_force_N(self._A0 + self._dAdz * z2, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
+        if self._area_tables:
+            A = np.stack([self.components[b].area_m2(z2[i]) for i, b in enumerate(self.bellow_names)])
+        else:
+            A = self._A0 + self._dAdz * z2
+        F = bellow_force_N(A, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
         return F.reshape(z.shape)
 
     def bellow_stiffness_N_per_m(self, x, z_m) -> np.ndarray:
@@ -650,7 +676,11 @@ class Circuit:
         z2 = self._per_bellow(z, x2)
         p = self.bellow_pressures_Pa(x2, z2)
         n = np.where(self._isothermal, 1.0, self.gas.gamma)
-        K = bellow_stiffness_N_per_m(self._bellow_columns, z2, p, self.atmosphere.p_Pa, n)
+        if self._area_tables:
+            K = np.stack([bellow_stiffness_N_per_m(self.components[b], z2[i], p[i], self.atmosphere.p_Pa, n)
+                          for i, b in enumerate(self.bellow_names)])
+        else:
+            K = bellow_stiffness_N_per_m(self._bellow_columns, z2, p, self.atmosphere.p_Pa, n)
         return K.reshape(z.shape)
 
     def total_mass_kg(self, x) -> np.ndarray:
