@@ -13,6 +13,7 @@ from pneumatics.orifice import Orifice
 from pneumatics.pipe import Pipe
 from vehicle.params import BELLOWS
 
+from .criteria import static_wheel_loads, wheel_unloading
 from .experiments import Scenario
 from .interrupts import install_in_worker
 from .master import CoSimulation
@@ -138,6 +139,18 @@ def simulate_cases(scenario: Scenario, settings: Sequence[Optional[bool]], make_
         datasets.append(ds.isel(case=np.argsort(ds["k_W_per_K"].values, kind="stable")))  # inf sorts last
         diagnoses += [f"valves {'on' if valves else 'off'}: {d}" if named else d for d in diag]
     return concat_cases(datasets), diagnoses
+
+
+def add_wheel_unloading(ds: xr.Dataset, column: Optional[str] = None) -> None:
+    """Add the static wheel loads ``Q0_N`` (wheel x case: each wheelset's mean load at t = 0, the
+    car at rest on level track; EN 14363) and the wheel unloading ``dqq`` = (Q0 - Q)/Q0 (time x
+    wheel x case, positive: unloaded) to a car run's Dataset, in place; ``column``: its CSV
+    column pattern (None: not written to the time series)."""
+    Q = ds["wheel_load_N"].transpose("time", "wheel", "case")
+    Q0 = static_wheel_loads(Q.values[0])                                   # (8, cases)
+    ds["Q0_N"] = (("wheel", "case"), Q0, {"units": "N", "long_name": "static wheel load Q0 (wheelset mean, level track)"})
+    attrs = {"units": "1", "long_name": "wheel unloading ΔQ/Q0 = (Q0 - Q)/Q0 (positive: unloaded)"}
+    ds["dqq"] = (("time", "wheel", "case"), wheel_unloading(Q.values, Q0), {**attrs, **({"column": column} if column else {})})
 
 
 def per_case(da: xr.DataArray, scale: float = 1.0, label: str = "") -> List[Curve]:

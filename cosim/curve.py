@@ -14,10 +14,9 @@ import xarray as xr
 from vehicle.car import MetroCar
 from vehicle.params import BELLOWS, WHEELS
 
-from .car_runs import bellow_panels, of_setting, per_case, simulate_cases
+from .car_runs import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
 from .checks import CaseMetrics
-from .criteria import (SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, static_wheel_loads,
-                       wheel_unloading, window_mean)
+from .criteria import SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, window_mean
 from .experiments import CurveTest, Scenario
 from .outcome import Outcome, Runner, largest
 from .plots import Figure, Panel
@@ -65,12 +64,11 @@ def wheel_rail_series(ds: xr.Dataset, curve: CurveTest) -> None:
     ``y_over_q_2m`` and ``sum_y_2m_N`` (their EN 14363 2 m sliding means, NaN for the first
     2 m)."""
     t = ds["time"].values
-    Q = ds["wheel_load_N"]
-    Q0 = _over_time(Q, lambda v: np.broadcast_to(static_wheel_loads(v[0]), v.shape))
-    ds["dqq"] = _attrs(wheel_unloading(Q, Q0), units="1", long_name="wheel unloading ΔQ/Q0 = (Q0 - Q)/Q0")
+    add_wheel_unloading(ds)
     if "lateral_wheel_force_N" not in ds:
         return
     W = sliding_window_s(curve)
+    Q = ds["wheel_load_N"]
     Y = ds["lateral_wheel_force_N"]
     with np.errstate(invalid="ignore", divide="ignore"):
         yq = xr.where(Q > 0.0, Y / Q, xr.where(Q.isnull() | Y.isnull(), np.nan, 0.0))
@@ -250,8 +248,8 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     sum_y = _largest_after(t, np.abs(case["sum_y_2m_N"].transpose("time", "wheelset").values), t_full)
     row.update({f"sum_y_max_{ws}_N": float(v) for ws, v in zip(WHEELSETS, sum_y)})
     row["sum_y_max_N"] = largest(sum_y)
-    Q0 = float(np.mean(case["wheel_load_N"].isel(time=0).values))   # static, level track: every wheel
-    row["sum_y_lim_N"] = prudhomme_limit_N(Q0, curve.prudhomme_alpha)
+    # each wheelset's own static wheel load; the smallest limit (the lightest wheelset) is reported
+    row["sum_y_lim_N"] = prudhomme_limit_N(float(case["Q0_N"].min()), curve.prudhomme_alpha)
     for name, column in (("wheelset_lateral_m", "y_ws_max_{}_m"), ("wheelset_lateral_to_rails_m", "y_ws_rails_max_{}_m"),
                          ("angle_of_attack_rad", "aoa_max_{}_rad")):
         worst = np.abs(case[name].transpose("time", "wheelset").values).max(axis=0)
@@ -309,7 +307,7 @@ def wheel_rail_figures(ds: xr.Dataset, curve: CurveTest, rows: List[Dict[str, ob
         dqq = [Panel(per_case(sub["dqq"].sel(wheel=w)), "time t [s]", f"ΔQ/Q0, wheel {w}", f"wheel {w}")
                for w in WHEELS]
         out.append(Figure(f"wheel_dqq_valves={tag}.png", dqq, f"Wheel unloading ΔQ/Q0 per wheel, valves {tag}", 2))
-        sum_y = [Panel(per_case(sub["sum_y_2m_N"].sel(wheelset=ws), 1e-3), "time t [s]", f"(ΣY)_2m [kN]",
+        sum_y = [Panel(per_case(sub["sum_y_2m_N"].sel(wheelset=ws), 1e-3), "time t [s]", "(ΣY)_2m [kN]",
                        f"wheelset {ws}", hlines=prud) for ws in WHEELSETS]
         out.append(Figure(f"wheelset_sum_y_valves={tag}.png", sum_y,
                           f"ΣY per wheelset (+ left), {SLIDING_MEAN_M:g} m sliding mean, valves {tag}", 2))

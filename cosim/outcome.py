@@ -98,7 +98,7 @@ class Outcome:
     def check_report(self) -> str:
         lines = check_report(self.scenario.checks, self.cases, self.metrics).splitlines()[:-1]
         for failure in self.validity_failures():
-            lines.append(f"outside the model's validity: {failure} (FAIL; the scenario's allow: list accepts it)")
+            lines.append(f"outside the model's validity: {failure} (FAIL; list it under the scenario's allow: to accept it)")
         if self.diverged:
             lines.append(f"diverged: {self.diverged} (FAIL)")
         lines.append("all limits hold" if self.checks_hold() else "LIMIT VIOLATED")

@@ -12,9 +12,9 @@ import xarray as xr
 from vehicle.car import MetroCar
 from vehicle.params import WHEELS
 
-from .car_runs import bellow_panels, of_setting, per_case, simulate_cases
+from .car_runs import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
 from .checks import CaseMetrics
-from .criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading, window_drift, window_mean
+from .criteria import DQQ_LIMIT, window_drift, window_mean
 from .experiments import Scenario, TwistTest
 from .outcome import Outcome, Runner, largest, warn
 from .plots import Figure, Panel
@@ -92,11 +92,7 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
     :mod:`cosim.series`) with the wheel unloading ``dqq`` (ΔQ/Q0, time x wheel x case) added, and
     the divergence diagnoses."""
     ds, diagnoses = simulate_cases(scenario, valve_settings(scenario), make_car, scenario.twist.duration_s, progress)
-    Q = ds["wheel_load_N"].transpose("time", "wheel", "case")
-    Q0 = static_wheel_loads(Q.values[0])                                   # (8, cases)
-    ds["Q0_N"] = (("wheel", "case"), Q0, {"units": "N", "long_name": "static wheel load Q0 (wheelset mean, level track)"})
-    ds["dqq"] = (("time", "wheel", "case"), wheel_unloading(Q.values, Q0),
-                 {"units": "1", "long_name": "wheel unloading ΔQ/Q0 (positive: unloaded)", "column": "dqq_{}"})
+    add_wheel_unloading(ds, column="dqq_{}")
     return ds, diagnoses
 
 

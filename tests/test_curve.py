@@ -27,7 +27,8 @@ def simulate_curve(s, valves):
     """The curve scenario ``s`` with the valves connected or not: (k values, arrays by name with
     time first and the case last, as (samples, ..., cases), diagnoses, labelled Dataset)."""
     ds, diag = simulate(dataclasses.replace(s, curve=dataclasses.replace(s.curve, valve_settings=(valves,))))
-    arrays = {name: ds[name].transpose("time", ..., "case").values for name in ds.data_vars if "case" in ds[name].dims}
+    arrays = {name: ds[name].transpose("time", ..., "case").values for name in ds.data_vars
+              if {"time", "case"} <= set(ds[name].dims)}
     arrays["t_s"] = ds["time"].values
     return list(ds["k_W_per_K"].values), arrays, diag, ds
 
