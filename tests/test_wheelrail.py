@@ -104,8 +104,27 @@ def test_stored_table_is_reproduced_by_the_derivation(table):
 
 def test_table_range_and_resolution(table):
     y = table.columns["y_ws_mm"]
-    assert y[0] == -12.0 and y[-1] == 12.0 and y.size == 241
-    np.testing.assert_allclose(np.diff(y), 0.1, atol=1e-12)
+    assert y[0] == -12.0 and y[-1] == 12.0
+    # every 0.1 mm row is there; the cells between them are either whole or split in ten
+    coarse = np.arange(-120, 121) * 0.1
+    assert np.isin(np.round(coarse, 9), np.round(y, 9)).all()
+    steps = np.diff(y)
+    assert np.all(np.isclose(steps, 0.1, atol=1e-9) | np.isclose(steps, 0.01, atol=1e-9))
+    assert 200 < np.sum(np.isclose(steps, 0.01, atol=1e-9)) < 400  # 22 cells refined, not all
+
+
+def test_contact_jumps_lie_within_refined_cells(table):
+    """The force law blends a jump over its cell: every jump of the contact point (> 0.5 mm on
+    the wheel between neighbouring rows) and every fast turn of the contact angle (> 0.02 rad)
+    must lie in a 0.01 mm cell, the width over which an elastic two-point contact shares its
+    load (see ContactTable.derive)."""
+    c, y = table.columns, table.columns["y_ws_mm"]
+    steps = np.diff(y)
+    for side in "LR":
+        fast = (np.abs(np.diff(c[f"yw_{side}_mm"])) > 0.5) | (
+            np.abs(np.diff(c[f"gamma_{side}_rad"])) > 0.02)
+        assert fast.any()
+        np.testing.assert_allclose(steps[fast], 0.01, atol=1e-9)
 
 
 def test_contact_table_is_symmetric(table):
@@ -158,7 +177,8 @@ def test_flange_contact_arises_from_the_geometry(table):
     assert after.yw_L < -35e-3  # on the flange flank, > 35 mm from the tape circle
     assert after.r_L - before.r_L > 5e-3  # rolling radius steps up by > 5 mm
     jumps = [j for j in table.contact_jumps() if j["side"] == "L" and j["y_from_mm"] > 0]
-    assert [round(j["y_to_mm"], 1) for j in jumps] == [0.3, 4.9, 6.3]
+    # located to the 0.01 mm of the refined cells (ContactTable.derive)
+    assert [j["y_to_mm"] for j in jumps] == pytest.approx([0.21, 4.85, 6.26], abs=1e-9)
 
 
 def test_equivalent_conicity_definitions(table):

@@ -5,7 +5,7 @@ its 1:40 inclination), gauge 1435 mm measured 14 mm below the running surface, w
 back-to-back 1360 mm, tape circle 70 mm from the flange back at the nominal radius (0.46 m for
 the default table, the Manchester wheel; ``--nominal-radius-m 0.42`` for the metro car's 840 mm
 wheels, ``vehicle.params.VehicleParams.wheel_radius_m``); wheelset lateral displacement
--12 .. +12 mm every 0.1 mm. Prints the summary numbers quoted in docs/wheel_rail.md.
+-12 .. +12 mm every 0.1 mm, every 0.01 mm across the contact jumps. Prints the summary numbers quoted in docs/wheel_rail.md.
 ``--check`` compares with the stored file instead of writing it. The stored files are
 :func:`table_path` of their radius (``data/S1002_UIC60_1in40_1435_r460.csv``, ``..._r420.csv``).
 """
@@ -35,12 +35,12 @@ def summary(table: ContactTable) -> str:
     y0, y1 = table.y_range_m
     n = table.columns["y_ws_mm"].size
     lines.append(f"table: y = {1e3 * y0:g} .. {1e3 * y1:g} mm, {n} rows "
-                 f"(step {np.diff(table.columns['y_ws_mm'])[0]:.3g} mm)")
+                 f"({table.meta.get('grid', 'grid of the file')})")
     lines.append(f"centred: r0 = {table.r0:.6f} m, contact half spacing b = "
                  f"{table.contact_half_spacing:.6f} m")
     for j in table.contact_jumps():
         if j["side"] == "L" and j["y_from_mm"] >= 0:
-            lines.append("left-wheel contact jump between y = {y_from_mm:.1f} and {y_to_mm:.1f} mm:"
+            lines.append("left-wheel contact jump between y = {y_from_mm:.2f} and {y_to_mm:.2f} mm:"
                          " yw {yw_from_mm:.2f} -> {yw_to_mm:.2f} mm, gamma {gamma_from_rad:.4f} ->"
                          " {gamma_to_rad:.4f} rad".format(**j))
     lines.append(f"flange contact (gamma_L > 0.7 rad) from y = "

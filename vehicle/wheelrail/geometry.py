@@ -46,7 +46,7 @@ increasing in roll), then dz = -g_L. The right side is evaluated as the mirror i
 Because the global minimum is taken, the contact point *jumps* wherever two local minima
 exchange: first to the flange root, then onto the flange. Those jumps are in the table as
 steps in ``yw``/``r``/``gamma`` between neighbouring rows (a rigid two-point contact exists only
-at the jump itself).
+at the jump itself); :meth:`ContactTable.derive` refines the cells holding them to 0.01 mm.
 
 Placement (CONTACT conventions, CONTACT user guide section "Track and roller geometry"):
 
@@ -332,6 +332,23 @@ COLUMNS = [
 ]
 
 
+#: a table cell is refined when between its rows a contact angle changes by more than this
+#: [rad] or a contact point moves on the wheel profile by more than this [mm] (either wheel):
+#: the contact jumps and the steep flanks next to them (S1002 / UIC60 1:40: near +-0.25,
+#: +-4.9 and +-6.0 .. 6.8 mm)
+REFINE_WHEN = {"gamma_{}_rad": 0.02, "yw_{}_mm": 0.5}
+
+
+def _cells_to_refine(rows: list[dict]) -> list[int]:
+    """Indices i of the cells [row i, row i + 1] to refine (see :data:`REFINE_WHEN`)."""
+    out = []
+    for i, (a, b) in enumerate(zip(rows[:-1], rows[1:])):
+        if any(abs(b[q.format(s)] - a[q.format(s)]) > lim
+               for q, lim in REFINE_WHEN.items() for s in "LR"):
+            out.append(i)
+    return out
+
+
 class ContactState(NamedTuple):
     """Interpolated contact geometry at wheelset lateral displacement y (SI units)."""
 
@@ -387,16 +404,37 @@ class ContactTable:
 
     @classmethod
     def derive(cls, wheel: Profile, rail: Profile, setup: PairSetup, y_max_mm: float = 12.0,
-               dy_mm: float = 0.1) -> "ContactTable":
+               dy_mm: float = 0.1, refine_dy_mm: float | None = 0.01) -> "ContactTable":
+        """The table on a grid of ``dy_mm`` over +-``y_max_mm``, refined to ``refine_dy_mm``
+        in every cell where the contact point moves fast (:data:`REFINE_WHEN`; None: no
+        refinement).
+
+        Why refine: between rows the table is read by linear interpolation, which blends a jump
+        over its whole cell; with the jump cells every 0.01 mm the jumps are located to
+        0.01 mm and the fast turn of the contact angle before the flange jump (0.50 to 0.67 rad
+        over the last 0.1 mm) is resolved. The force law does not read the rigid rows as they
+        are: it smooths them (:class:`~vehicle.wheelrail.contact_law.ContactLawTable`, where the
+        reason is measured)."""
         geo = ContactGeometry(wheel, rail, setup)
         n = int(round(y_max_mm / dy_mm))
         if not math.isclose(n * dy_mm, y_max_mm, rel_tol=0, abs_tol=1e-9):
             raise ValueError("y_max_mm must be a multiple of dy_mm")
         ys = np.arange(-n, n + 1) * dy_mm
         rows = [geo.solve(float(y)) for y in ys]
+        if refine_dy_mm is not None:
+            m = int(round(dy_mm / refine_dy_mm))
+            if m < 2 or not math.isclose(m * refine_dy_mm, dy_mm, rel_tol=1e-12):
+                raise ValueError("dy_mm must be a multiple (>= 2) of refine_dy_mm")
+            fine = [k for i in _cells_to_refine(rows) for k in range(m * (i - n) + 1,
+                                                                     m * (i + 1 - n))]
+            extra = {k: geo.solve(k * refine_dy_mm) for k in fine}
+            grid = sorted([m * (i - n) for i in range(ys.size)] + fine)
+            ys = np.array(grid, dtype=float) * refine_dy_mm
+            coarse = {m * (i - n): row for i, row in enumerate(rows)}
+            rows = [coarse[k] if k in coarse else extra[k] for k in grid]
         cols = {c: np.array([row[c] for row in rows], dtype=float) for c in COLUMNS}
         cols["y_ws_mm"] = ys
-        i0 = n  # y = 0
+        i0 = int(np.argmin(np.abs(ys)))  # y = 0
         cols["dz_mm"] = cols["dz_mm"] - cols["dz_mm"][i0]
         meta = {
             "wheel_profile": Path(wheel.source).name,
@@ -408,6 +446,9 @@ class ContactTable:
             "rail_profile_origin_lateral_mm": repr(geo.rail_offset),
             "rail_gauge_point_y_mm": repr(geo.rail_y_gauge),
             "method": "rigid, yaw-free, minimum vertical distance per side, roll by Brent",
+            "grid": (f"every {dy_mm!r} mm" if refine_dy_mm is None else
+                     f"every {dy_mm!r} mm, every {refine_dy_mm!r} mm in cells where "
+                     + ", ".join(f"|d {k.format('L/R')}| > {v!r}" for k, v in REFINE_WHEN.items())),
         }
         return cls(cols, meta)
 
