@@ -437,9 +437,9 @@ class MetroCar:
             spin_inertia_kg_m2=p.wheelset_inertia_yy_kg_m2,
             yaw_inertia_kg_m2=p.wheelset_inertia_zz_kg_m2, axle_load_N=2.0 * self._P_axlebox_N,
             gravity_m_per_s2=g, hertz_constant_N_per_m1_5=p.hertz_constant_N_per_m1_5,
-            contact_damping_N_s_per_m=p.contact_damping_N_s_per_m,
+            contact_damping_N_s_per_m=cp.normal_damping_N_s_per_m,
             friction_coefficient=cp.friction_coefficient)
-        law = ContactLawTable(self.contact_table, wp)
+        law = ContactLawTable(self.contact_table, wp, smoothing_mm=cp.table_smoothing_mm)
         r0 = self.contact_table.r0
 
         def contact_model(z_centre):

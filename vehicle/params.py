@@ -217,8 +217,9 @@ class ContactParams:
     11): the wheelsets run free laterally and in yaw on the contact forces of
     :mod:`vehicle.wheelrail.contact_law` (Hertz normal force along the contact normal, Kalker's
     linear creep forces with Shen-Hedrick-Elkins saturation). The normal contact's Hertz
-    constant and damping are :class:`VehicleParams`' ``hertz_constant_N_per_m1_5`` and
-    ``contact_damping_N_s_per_m``, the wheel radius ``wheel_radius_m`` (the radius at the tape
+    constant is :class:`VehicleParams`' ``hertz_constant_N_per_m1_5`` (its damping is
+    ``normal_damping_N_s_per_m`` below, not the kinematic car's ``contact_damping_N_s_per_m``),
+    the wheel radius ``wheel_radius_m`` (the radius at the tape
     circle of the table's wheel profile); ``contact_spacing_m`` is not used (the contact points
     come from the table: 1.5065 m apart for S1002 on UIC60 1:40, centred). Kept apart from
     :class:`VehicleParams` because dimensionless and text values do not fit its unit-suffixed
@@ -242,6 +243,20 @@ class ContactParams:
     # angle exceeds this: 0.7 rad (40 deg) separates the tread and flange root (S1002 on UIC60
     # 1:40: up to 0.53 rad before the jump) from the flange flank (1.22 rad, 70 deg).
     flange_angle_rad: float = 0.7
+    # Damping of the normal contact force [N s/m], along the normal, per wheel. The track is
+    # rigid in this model, so the contact damping stands in for the track's (rail pads, ballast),
+    # which damps the wheelset-on-track modes far more than the Hertz contact itself: 2e5 gives
+    # the ~250 Hz wheelset-on-contact modes a damping ratio of ~0.1 (contact stiffness ~1e9 N/m,
+    # 800 kg). With the car's vertical value 5e4 (ratio ~0.03) a wheel on the flange root has a
+    # friction-driven flutter of those modes: the linearised flanging wheelset's eigenvalues
+    # reach +90 /s (tests/test_contact_stability.py), which at 5 ms steps only the integrator's
+    # numerical damping hid (docs/wheel_rail.md, "Flange contact and step convergence").
+    normal_damping_N_s_per_m: float = 2.0e5
+    # Gaussian smoothing of the contact table the force law reads, standard deviation in mm of
+    # wheelset lateral displacement (vehicle.wheelrail.contact_law.ContactLawTable: the rigid
+    # table's jumps and its fast turn across the conformal flange root, smoothed as an elastic
+    # contact spreads over them). 0 reads the rigid table as it is.
+    table_smoothing_mm: float = 0.1
     # Contact table: a CSV written by vehicle.wheelrail.ContactTable.to_csv; "" = the S1002 /
     # UIC60 1:40 / 1435 mm table for the car's wheel radius (shipped for 0.42 m and 0.46 m,
     # vehicle/wheelrail/data, else derived from the profiles in ~2 s).
@@ -250,6 +265,10 @@ class ContactParams:
     def __post_init__(self):
         if not (self.friction_coefficient > 0.0 and math.isfinite(self.friction_coefficient)):
             raise ValueError(f"friction_coefficient must be > 0, got {self.friction_coefficient}")
+        for name in ("normal_damping_N_s_per_m", "table_smoothing_mm"):
+            v = getattr(self, name)
+            if not (v >= 0.0 and math.isfinite(v)):
+                raise ValueError(f"{name} must be >= 0, got {v}")
         if not (self.min_creep_speed_m_per_s > 0.0
                 and math.isfinite(self.min_creep_speed_m_per_s)):
             raise ValueError("min_creep_speed_m_per_s must be > 0, got "

@@ -103,7 +103,8 @@ class WheelsetParams:
     """A wheelset and its contact (SI). Defaults: the metro car's wheelset (``VehicleParams``:
     800 kg, 494 / 49 / 494 kg m^2) under its static axle load (carbody 17 t and bogies 1.9 t on
     four axles: 2 x 29.43 kN wheel load, of which 51.0 kN comes through the axleboxes), the car's
-    vertical Hertz constant and contact damping, and mu = 0.36 (the issue's Nadal setting)."""
+    vertical Hertz constant, the normal contact damping of contact guidance
+    (:class:`~vehicle.params.ContactParams`) and mu = 0.36 (the issue's Nadal setting)."""
 
     mass_kg: float = 800.0
     roll_inertia_kg_m2: float = 494.0
@@ -113,7 +114,8 @@ class WheelsetParams:
     axle_load_N: float = (17000.0 * GRAVITY_M_PER_S2 / 2.0 + 1900.0 * GRAVITY_M_PER_S2) / 2.0
     gravity_m_per_s2: float = GRAVITY_M_PER_S2
     hertz_constant_N_per_m1_5: float = 1.0e11  # VehicleParams.hertz_constant_N_per_m1_5
-    contact_damping_N_s_per_m: float = 5.0e4  # VehicleParams.contact_damping_N_s_per_m
+    # normal contact damping: ContactParams.normal_damping_N_s_per_m (see there)
+    contact_damping_N_s_per_m: float = 2.0e5
     friction_coefficient: float = 0.36
     shear_modulus_Pa: float = SHEAR_MODULUS_PA
     poisson_ratio: float = POISSON_RATIO
@@ -203,22 +205,50 @@ GEOMETRY_COLUMNS = (
 )
 
 
+#: Gaussian smoothing (standard deviation, mm of lateral displacement) of the contact geometry
+#: the force law reads; see :class:`ContactLawTable`
+SMOOTHING_MM = 0.1
+#: row spacing of the smoothed law table [mm]
+SMOOTHED_GRID_MM = 0.01
+
+
 class ContactLawTable:
     """The contact table in SI plus Kalker's creep coefficients per row, for the force law.
 
     ``k11 = G a b C11``, ``k22 = G a b C22``, ``k23 = G (ab)^1.5 C23``, ``k33 = G (ab)^2 C33``
     with the Hertz ellipse of that row's contact at ``reference_load_N`` (the law rescales them
-    with the actual normal force). Interpolation is linear in y, as
-    :meth:`ContactTable.at <vehicle.wheelrail.geometry.ContactTable.at>`.
+    with the actual normal force). Interpolation is linear in y.
+
+    **Smoothing** (``smoothing_mm``, default :data:`SMOOTHING_MM` = 0.1 mm; 0 or None: the
+    rigid rows as they are): every column is resampled every :data:`SMOOTHED_GRID_MM` and
+    convolved with a Gaussian of that standard deviation in y (linear extrapolation at the
+    ends, so a straight column stays straight). The rigid single-point table jumps where two
+    contact points exchange (tread to flange root) and turns by 0.56 rad within 3 um of y
+    where the contact runs through the near-conformal flange root onto the flank. Read as it
+    is, it gives a wheelset whose flange-contact modes grow: linearised about its steady
+    rolling state pressed against the flange (continuous model, no integrator;
+    :mod:`vehicle.wheelrail.stability`, ``tests/test_contact_stability.py``) its modes above
+    100 Hz grow at up to +390 /s with 0.1 mm rows and +1000 /s with 0.01 mm rows at the jumps,
+    and normal damping up to 1e6 N s/m does not remove that. Smoothed over 0.1 mm with the
+    normal damping of :class:`~vehicle.params.ContactParams` (2e5 N s/m) they are damped at
+    every load (<= -98 /s); either alone is not enough (smoothed, 5e4 N s/m: +82 /s).
+    Physically the smoothing stands for the elastic contact spreading over the conformal
+    flange root, where wheel and rail stay within a few um of each other over 4 mm of the
+    profiles while the wheel sinks ~50 um into the rail: one rigid contact point does not
+    describe that. What the smoothing width changes is measured in docs/wheel_rail.md
+    ("Flange contact and step convergence").
     """
 
     def __init__(self, table: ContactTable, params: WheelsetParams | None = None,
-                 reference_load_N: float = 50.0e3):
+                 reference_load_N: float = 50.0e3, smoothing_mm: float | None = SMOOTHING_MM):
         p = params or WheelsetParams()
         if not reference_load_N > 0:
             raise ValueError("reference_load_N must be positive")
+        if smoothing_mm is not None and not (smoothing_mm >= 0 and math.isfinite(smoothing_mm)):
+            raise ValueError(f"smoothing_mm must be >= 0, got {smoothing_mm!r}")
         self.table = table
         self.reference_load_N = float(reference_load_N)
+        self.smoothing_mm = float(smoothing_mm or 0.0)
         c = table.columns
         self.y = c["y_ws_mm"] * 1e-3
         roll = c["roll_rad"]
@@ -241,6 +271,9 @@ class ContactLawTable:
             for j, name in enumerate(("k11", "k22", "k23", "k33")):
                 cols[f"{name}_{side}"] = k[j]
         self.values = np.vstack([cols[n] for n in GEOMETRY_COLUMNS])  # (columns, rows)
+        if self.smoothing_mm > 0:
+            self.y, self.values = _smoothed(self.y, self.values, 1e-3 * self.smoothing_mm,
+                                            1e-3 * SMOOTHED_GRID_MM)
         self.slopes = np.diff(self.values, axis=1) / np.diff(self.y)  # (columns, rows - 1)
 
     @property
@@ -270,6 +303,26 @@ class ContactLawTable:
         return out
 
 
+def _smoothed(y: np.ndarray, values: np.ndarray, sigma: float, dy: float):
+    """``values`` (columns, rows) over ``y`` resampled every ``dy`` over the same range and
+    convolved with a Gaussian of standard deviation ``sigma`` (kernel cut at 4 sigma; beyond
+    the ends each column is extended linearly). Returns (grid, smoothed values)."""
+    n = int(round((y[-1] - y[0]) / dy))
+    grid = y[0] + dy * np.arange(n + 1)
+    grid[-1] = y[-1]
+    half = int(math.ceil(4.0 * sigma / dy))
+    kernel = np.exp(-0.5 * (dy * np.arange(-half, half + 1) / sigma) ** 2)
+    kernel /= kernel.sum()
+    ext = np.arange(1, half + 1) * dy
+    out = np.empty((values.shape[0], grid.size))
+    for j, col in enumerate(values):
+        v = np.interp(grid, y, col)
+        lo = v[0] - (v[1] - v[0]) / dy * ext[::-1]
+        hi = v[-1] + (v[-1] - v[-2]) / dy * ext
+        out[j] = np.convolve(np.concatenate([lo, v, hi]), kernel, mode="valid")
+    return grid, out
+
+
 # ----------------------------------------------------------------------------- the law
 def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
                   reference_load_N: float, V_ref=None) -> dict:
@@ -294,8 +347,12 @@ def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetP
     lever = yc - st.y
     cg, sg = ops.cos(gam), ops.sin(gam)
     # --- normal force: Hertz along the normal, unilateral ---
-    delta = (geo["dz0"] - st.z) + lever * (geo["roll0"] - st.roll)
-    delta_t = (geo["ddz0"] + lever * geo["droll0"]) * st.y_t - st.z_t - lever * st.roll_t
+    # rolling by d(roll) moves the contact point (lever l, depth r below the centre) up by
+    # l d(roll) and sideways by r d(roll): along the normal (cos g, -s sin g) that is
+    # cos(g) (l - s r tan g) d(roll), the moment arm of N about the axle (_arms: wn)
+    arm = lever - s * r * sg / cg
+    delta = (geo["dz0"] - st.z) + arm * (geo["roll0"] - st.roll)
+    delta_t = (geo["ddz0"] + arm * geo["droll0"]) * st.y_t - st.z_t - arm * st.roll_t
     dn = ops.max(delta, c0) * cg
     N = ops.where(delta > 0.0, ops.max(p.hertz_constant_N_per_m1_5 * ops.pow(dn, 1.5)
                                        + p.contact_damping_N_s_per_m * cg * delta_t, c0), c0)
