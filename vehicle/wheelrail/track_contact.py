@@ -188,7 +188,7 @@ class WheelsetTrackContact:
 
     # ------------------------------------------------------------------ lookups
     def _geo_scalar(self, side: str, y: float) -> dict:
-        """The side's table columns at y (linear interpolation between the 0.1 mm rows)."""
+        """The side's table columns at y (linear interpolation between the rows)."""
         yl = self._y_list
         # beyond the table (a derailing wheelset, or a Newton iterate) its end rows hold: the
         # law stays finite and the next PreStep stops the run (WheelsetTrackContact.in_table)
