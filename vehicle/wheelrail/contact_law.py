@@ -204,6 +204,12 @@ GEOMETRY_COLUMNS = (
     "k11_L", "k22_L", "k23_L", "k33_L", "k11_R", "k22_R", "k23_R", "k33_R",
 )
 
+#: per side: the sign (+1 left) and the keys of that wheel's columns in ``geo`` (r, gamma, yc,
+#: k11, k22, k23, k33), so that the law does not build key strings per evaluation
+_SIDE_KEYS = {side: (sign, tuple(f"{name}_{side}" for name in
+                                 ("r", "gamma", "yc", "k11", "k22", "k23", "k33")))
+              for side, sign in (("L", 1.0), ("R", -1.0))}
+
 
 #: Gaussian smoothing (standard deviation, mm of lateral displacement) of the contact geometry
 #: the force law reads; see :class:`ContactLawTable`
@@ -339,33 +345,36 @@ def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetP
     ``eps`` (Shen-Hedrick-Elkins factor: the forces are eps fx, eps fy, eps mz), ``xi_x``,
     ``xi_y``, ``phi`` (creepages), ``delta`` (vertical overlap, m) and the geometry the force
     acts through (``r``, ``lever`` = yc - y, ``cos_gamma``, ``sin_gamma``, ``sign`` +1 left)."""
-    if side not in ("L", "R"):
-        raise ValueError("side must be 'L' or 'R'")
-    s = 1.0 if side == "L" else -1.0
+    try:
+        s, (k_r, k_gam, k_yc, k11, k22, k23, k33) = _SIDE_KEYS[side]
+    except KeyError:
+        raise ValueError("side must be 'L' or 'R'") from None
+    y, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin_t = st
     c0 = ops.const(0.0)
-    r, gam, yc = geo["r_" + side], geo["gamma_" + side], geo["yc_" + side]
-    lever = yc - st.y
+    c3 = ops.const(3.0)
+    r, gam, yc = geo[k_r], geo[k_gam], geo[k_yc]
+    lever = yc - y
     cg, sg = ops.cos(gam), ops.sin(gam)
     # --- normal force: Hertz along the normal, unilateral ---
     # rolling by d(roll) moves the contact point (lever l, depth r below the centre) up by
     # l d(roll) and sideways by r d(roll): along the normal (cos g, -s sin g) that is
     # cos(g) (l - s r tan g) d(roll), the moment arm of N about the axle (_arms: wn)
     arm = lever - s * r * sg / cg
-    delta = (geo["dz0"] - st.z) + arm * (geo["roll0"] - st.roll)
-    delta_t = (geo["ddz0"] + arm * geo["droll0"]) * st.y_t - st.z_t - arm * st.roll_t
+    delta = (geo["dz0"] - z) + arm * (geo["roll0"] - roll)
+    delta_t = (geo["ddz0"] + arm * geo["droll0"]) * y_t - z_t - arm * roll_t
     dn = ops.max(delta, c0) * cg
     N = ops.where(delta > 0.0, ops.max(p.hertz_constant_N_per_m1_5 * ops.pow(dn, 1.5)
                                        + p.contact_damping_N_s_per_m * cg * delta_t, c0), c0)
     # --- Kalker coefficients at this load: ellipse size ~ N^(1/3) ---
     load = N * (1.0 / reference_load_N)
     ab = ops.pow(load, 2.0 / 3.0)  # a b / (a b)_ref
-    f11, f22 = geo["k11_" + side] * ab, geo["k22_" + side] * ab
-    f23, f33 = geo["k23_" + side] * load, geo["k33_" + side] * ops.pow(load, 4.0 / 3.0)
+    f11, f22 = geo[k11] * ab, geo[k22] * ab
+    f23, f33 = geo[k23] * load, geo[k33] * ops.pow(load, 4.0 / 3.0)
     # --- creepages ---
     inv_V = 1.0 / (V if V_ref is None else V_ref)
-    xi_x = (V * (1.0 - kappa * yc) - lever * st.yaw_t - st.spin_t * r) * inv_V
-    xi_y = (st.y_t + r * st.roll_t - V * st.yaw) * inv_V / cg
-    phi = ((st.yaw_t + kappa * V) * cg - s * st.spin_t * sg) * inv_V
+    xi_x = (V * (1.0 - kappa * yc) - lever * yaw_t - spin_t * r) * inv_V
+    xi_y = (y_t + r * roll_t - V * yaw) * inv_V / cg
+    phi = ((yaw_t + kappa * V) * cg - s * spin_t * sg) * inv_V
     # --- Kalker linear + Shen-Hedrick-Elkins ---
     fx = -f11 * xi_x
     fy = -f22 * xi_y - f23 * phi
@@ -374,9 +383,9 @@ def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetP
         p.friction_coefficient * N, ops.const(1e-9))
     # eps = 1 - u/3 + u^2/27 = ((u - 4.5)^2 + 6.75)/27 for u <= 3 and 1/u beyond, written with
     # min/max: u is evaluated twice and no branch divides by zero
-    um = ops.min(u, ops.const(3.0))
+    um = ops.min(u, c3)
     eps = (ops.pow(um - 4.5, 2.0) * (1.0 / 27.0) + 0.25) * ops.min(
-        ops.const(1.0), 3.0 / ops.max(u, ops.const(3.0)))
+        ops.const(1.0), 3.0 / ops.max(u, c3))
     return {"N": N, "fx": fx, "fy": fy, "mz": mz, "eps": eps, "xi_x": xi_x, "xi_y": xi_y,
             "phi": phi, "delta": delta, "r": r, "lever": lever, "cos_gamma": cg,
             "sin_gamma": sg, "sign": s}
@@ -405,9 +414,17 @@ def force_and_moment(ops, w: dict, yaw) -> tuple[tuple, tuple]:
     """Track-frame force of one wheel's contact on the wheelset and its moment about the
     wheelset centre (N, N m), from a :func:`wheel_contact` dict."""
     (t1, t2, n), (m1, m2, mn) = _arms(ops, w, yaw)
-    Fx, Fy, Mz, N = w["eps"] * w["fx"], w["eps"] * w["fy"], w["eps"] * w["mz"], w["N"]
-    F = tuple(Fx * t1[k] + Fy * t2[k] + N * n[k] for k in range(3))
-    M = tuple(Fx * m1[k] + Fy * m2[k] + N * mn[k] + Mz * n[k] for k in range(3))
+    eps = w["eps"]
+    Fx, Fy, Mz, N = eps * w["fx"], eps * w["fy"], eps * w["mz"], w["N"]
+    # written out per component (no generator: this runs 8 times per residual of the car);
+    # the terms with a zero direction component (t1 and the moment arms have none along z,
+    # see _arms) are left out
+    F = (Fx * t1[0] + Fy * t2[0] + N * n[0],
+         Fx * t1[1] + Fy * t2[1] + N * n[1],
+         Fy * t2[2] + N * n[2])
+    M = (Fx * m1[0] + Fy * m2[0] + N * mn[0] + Mz * n[0],
+         Fx * m1[1] + Fy * m2[1] + N * mn[1] + Mz * n[1],
+         Fx * m1[2] + Mz * n[2])
     return F, M
 
 

@@ -153,7 +153,6 @@ class WheelsetTrackContact:
         self._y_list = law_table.y.tolist()
         self._last = law_table.y.size - 2
         idx = {n: j for j, n in enumerate(GEOMETRY_COLUMNS)}
-        self._j_roll0, self._j_dz0 = idx["roll0"], idx["dz0"]
         self._rows = {}
         self._cols = {}
         for side in _SIDES:
@@ -163,7 +162,8 @@ class WheelsetTrackContact:
             slos = law_table.slopes[js, :].T.tolist()
             self._rows[side] = [(names, v, s, s[names.index("roll0")], s[names.index("dz0")])
                                 for v, s in zip(vals, slos)]
-            self._cols[side] = (names, js)
+            # the side's columns as contiguous (columns, rows) blocks: one gather per lookup
+            self._cols[side] = (names, law_table.values[js], law_table.slopes[js])
         self.set_track([(r[0], 0.0, 0.0, 0.0, 0.0, 0.0) for r in self._ref])
 
     # ------------------------------------------------------------------ per step
@@ -206,12 +206,11 @@ class WheelsetTrackContact:
         y = np.clip(y, self._y[0], self._y[-1])  # end rows hold beyond the table
         i = np.clip(np.searchsorted(self._y, y, side="right") - 1, 0, self._last)
         dy = y - self._y[i]
-        names, js = self._cols[side]
-        vals = self.table.values
-        slos = self.table.slopes
-        geo = {n: vals[j, i] + slos[j, i] * dy for n, j in zip(names, js)}
-        geo["droll0"] = slos[self._j_roll0, i]
-        geo["ddz0"] = slos[self._j_dz0, i]
+        names, vals, slos = self._cols[side]
+        s = slos[:, i]
+        geo = dict(zip(names, vals[:, i] + s * dy))
+        geo["droll0"] = s[names.index("roll0")]
+        geo["ddz0"] = s[names.index("dz0")]
         return geo
 
     # ------------------------------------------------------------------ the kernel
