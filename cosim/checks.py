@@ -44,9 +44,9 @@ class Check:
 #: checkable metrics per scenario kind (each the largest over the selected cases)
 CHECK_METRICS = {"twist": ("dqq_max", "dqq_qs_max", "dqq_drift"),
                  "curve_entry": ("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "yq_max", "sum_y_max",
-                                 "dqq_max")}
+                                 "dqq_max", "dqq_2m_max")}
 #: metrics that can name a wheel (``dqq_max[3R]``): without one, the largest over the wheels
-WHEEL_METRICS = ("dqq_max", "dqq_qs_max", "dqq_drift", "yq_max")
+WHEEL_METRICS = ("dqq_max", "dqq_qs_max", "dqq_drift", "yq_max", "dqq_2m_max")
 #: curve_entry metrics of the lateral wheel-rail forces: they need ``curve.guidance: contact``
 #: (kinematic guidance has no lateral wheel-rail force: Y is NaN)
 CONTACT_METRICS = ("yq_max", "sum_y_max")

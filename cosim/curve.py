@@ -59,15 +59,17 @@ def _attrs(da: xr.DataArray, **attrs) -> xr.DataArray:
 
 def wheel_rail_series(ds: xr.Dataset, curve: CurveTest) -> None:
     """Add the running-safety series to a curve run's Dataset (in place): ``dqq`` (ΔQ/Q0 per
-    wheel, Q0 the static wheel load at t = 0, mean of the wheelset's two wheels, EN 14363) and,
-    with contact guidance, ``y_over_q`` (Y/Q per wheel; 0 on a wheel that carries nothing),
+    wheel, Q0 the static wheel load at t = 0, mean of the wheelset's two wheels, EN 14363),
+    ``dqq_2m`` (its 2 m sliding mean, NaN for the first 2 m) and, with contact guidance, ``y_over_q`` (Y/Q per wheel; 0 on a wheel that carries nothing),
     ``y_over_q_2m`` and ``sum_y_2m_N`` (their EN 14363 2 m sliding means, NaN for the first
     2 m)."""
     t = ds["time"].values
     add_wheel_unloading(ds)
+    W = sliding_window_s(curve)
+    ds["dqq_2m"] = _attrs(_over_time(ds["dqq"], lambda v: sliding_mean(t, v, W)), units="1",
+                          long_name=f"ΔQ/Q0 per wheel, sliding mean over {SLIDING_MEAN_M:g} m")
     if "lateral_wheel_force_N" not in ds:
         return
-    W = sliding_window_s(curve)
     Q = ds["wheel_load_N"]
     Y = ds["lateral_wheel_force_N"]
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -135,12 +137,12 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         row = summary_row(case, curve)
         rows.append(row)
         cases.append(case_metrics(row))
-    headline = ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg", "dqq_max")
+    headline = ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg", "dqq_max", "dqq_2m_max")
     headline += CONTACT_COLUMNS if curve.contact else ()
     metrics = {m: largest(r[m] for r in rows) for m in headline} if rows else {}
     shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg")
     if curve.contact:
-        shown += ("dqq_max",) + CONTACT_COLUMNS
+        shown += ("dqq_max", "dqq_2m_max") + CONTACT_COLUMNS
     info = {"window_s": curve.window, "guidance": curve.guidance}
     if curve.contact:
         info.update(sliding_mean_m=SLIDING_MEAN_M, yq_lim=rows[0]["yq_lim"] if rows else None,
@@ -155,7 +157,7 @@ def case_metrics(row: Dict[str, object]) -> CaseMetrics:
     """The checkable metrics of a summary row (:data:`cosim.checks.CHECK_METRICS`): the wheel
     metrics per wheel; ``yq_max`` and ``sum_y_max`` [N] only with contact guidance."""
     values = {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}
-    wheels = {"dqq_max": {w: row[f"dqq_max_{w}"] for w in WHEELS}}
+    wheels = {m: {w: row[f"{m}_{w}"] for w in WHEELS} for m in ("dqq_max", "dqq_2m_max")}
     if "yq_max" in row:
         values["sum_y_max"] = row["sum_y_max_N"]
         wheels["yq_max"] = {w: row[f"yq_max_{w}"] for w in WHEELS}
@@ -213,7 +215,10 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
 
     * ``dqq_max_<wheel>``, ``dqq_max``: the largest ΔQ/Q0 over the run (sampled values, no
       filter), per wheel and over the wheels (both guidances; kinematic Q is vertical, contact Q
-      normal to the track plane);
+      normal to the track plane); ``dqq_2m_max_<wheel>``, ``dqq_2m_max``: the same for its 2 m
+      sliding mean (the sampled peak of a flange impact's ~45 Hz ringing depends on where the
+      samples fall: on the R = 150 m twisted curve it moves by 9 % as the steps are halved,
+      while the 2 m mean holds to 4 digits; docs/wheel_rail.md);
 
     with contact guidance also, the 2 m sliding means (EN 14363) counted from the first whole
     window on:
@@ -230,13 +235,16 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     * ``flange_fraction_<wheel>``, ``flange_fraction``: the fraction of the samples a wheel is in
       flange contact, and the largest over the wheels."""
     t = case["time"].values
+    t_full = t[0] + sliding_window_s(curve)
     dqq = case["dqq"].transpose("time", "wheel").values
     worst = dqq.max(axis=0)
     row: Dict[str, object] = {f"dqq_max_{w}": float(v) for w, v in zip(WHEELS, worst)}
     row["dqq_max"] = largest(worst)
+    worst = _largest_after(t, case["dqq_2m"].transpose("time", "wheel").values, t_full)
+    row.update({f"dqq_2m_max_{w}": float(v) for w, v in zip(WHEELS, worst)})
+    row["dqq_2m_max"] = largest(worst)
     if "y_over_q_2m" not in case:
         return row
-    t_full = t[0] + sliding_window_s(curve)
     Y = case["lateral_wheel_force_N"].transpose("time", "wheel").values
     Y_max = Y.max(axis=0)
     row.update({f"Y_max_{w}_N": float(v) for w, v in zip(WHEELS, Y_max)})

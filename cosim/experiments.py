@@ -232,11 +232,11 @@ class CurveTest:
     whole car. ``valve_settings``: runs with the levelling and differential valves disconnected
     (false) and connected (true). ``window_s``: final window over which the end values (roll,
     bellow crushing) are averaged (default 5 s, or the whole run if shorter). ``guidance``:
-    ``kinematic`` (default: wheelsets led along the track by a joint, no lateral wheel-rail
-    forces; the paper's results use it, and a run takes 1/3 to 1/4 of the time with ``contact``) or ``contact`` (free
-    wheelsets on the S1002/UIC60 contact with Kalker creep forces, docs/wheel_rail.md: adds Y,
-    Y/Q, ΣY, wheelset displacement, angle of attack, flange contact to the outputs and the checks
-    ``yq_max`` and ``sum_y_max``); ``friction_coefficient``: the contact model's μ (null: 0.36,
+    ``contact`` (default: free wheelsets on the S1002/UIC60 contact with Kalker creep forces,
+    docs/wheel_rail.md: adds Y, Y/Q, ΣY, wheelset displacement, angle of attack, flange contact
+    to the outputs and the checks ``yq_max`` and ``sum_y_max``) or ``kinematic`` (wheelsets led
+    along the track by a joint, no lateral wheel-rail forces: the paper's model, which
+    scenarios/curve_entry.yaml reproduces; a run takes about 1/3 of the time); ``friction_coefficient``: the contact model's μ (null: 0.36,
     vehicle.params.ContactParams). Limits in the summary: Nadal (Y/Q)_lim = (tan γ - μ)/(1 + μ tan γ)
     with ``nadal_flange_angle_deg`` γ and ``nadal_friction`` μ (70°, 0.36: 1.20), Prud'homme
     ΣY_lim = α (10 kN + 2 Q0/3), α = ``prudhomme_alpha`` (EN 14363: 1, freight wagons 0.85).
@@ -254,7 +254,7 @@ class CurveTest:
     duration_s: float = 30.0
     valve_settings: Tuple[bool, ...] = (False, True)
     window_s: Optional[float] = None
-    guidance: str = "kinematic"
+    guidance: str = "contact"
     friction_coefficient: Optional[float] = None
     nadal_flange_angle_deg: float = 70.0
     nadal_friction: float = 0.36

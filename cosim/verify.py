@@ -39,7 +39,7 @@ HEADLINE_METRICS = {
               "dqq_qs_1L", "dqq_qs_1R", "dqq_qs_2L", "dqq_qs_2R", "dqq_qs_3L", "dqq_qs_3R",
               "dqq_qs_4L", "dqq_qs_4R"),
     "curve_entry": ("roll_max_rad", "roll_end_rad", "roll_mean_end_rad", "air_injected_kg",
-                    "air_exhausted_kg", "dqq_max",
+                    "air_exhausted_kg", "dqq_max", "dqq_2m_max",
                     # with wheel-rail contact (absent with kinematic guidance)
                     "yq_max", "sum_y_max_N", "Y_max_N"),
 }
