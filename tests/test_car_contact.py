@@ -119,7 +119,7 @@ def test_tight_curve_flange_contact_and_sign_conventions():
     wheelset of each bogie runs against the outer (right) rail (1R in flange contact), yawed
     with a negative angle of attack (nose pointing out of the curve), and the flange force on
     the outer wheel is the largest inward lateral force (Y/Q of that wheel the largest).
-    Measured: y = -6.24 / -6.23 mm, angle of attack -13.4 / -11.6 mrad, Y/Q(1R) = 0.53."""
+    Measured: y = -6.27 / -6.22 mm, angle of attack -13.4 / -11.6 mrad, Y/Q(1R) = 0.52."""
     track = TrackGeometry.curve_entry(15.0, 20.0, 150.0, 100.0)
     car = MetroCar(P, track=track, speed_m_per_s=10.0, guidance="contact")
     run(car, 6.0)
@@ -128,11 +128,11 @@ def test_tight_curve_flange_contact_and_sign_conventions():
     flange = car.flange_contact()
     Y, Q = car.lateral_wheel_forces_N(), car.wheel_loads_N()
     lead = [0, 2]  # wheelsets 1 and 3
-    assert np.all(y[lead] < -0.006)  # pressed to the right, past the flange jump at 6.3 mm
+    assert np.all(y[lead] < -0.006)  # pressed to the right, onto the flange root and flank
     assert np.all(aoa[lead] < -0.005)
     assert flange[1] and not flange[[0, 2, 3, 4, 6, 7]].any()
-    # 3R sits at the jump from the flange root to the flange (6.2 -> 6.3 mm, gamma 0.50 ->
-    # 1.22 rad): a contact angle between them (two-point contact region), flange or not
+    # 3R sits on the turn from the flange root to the flank (the smoothed table's 0.5 -> 1.2 rad
+    # around 6.28 mm; measured gamma 0.68 at -6.22 mm): flange or not, its angle is past the root's
     assert car.contact_state().gamma_rad[5] > 0.5
     assert int(np.argmax(Y / Q)) == WHEELS.index("1R")
     assert 0.2 < (Y / Q)[1] < 1.0
@@ -184,7 +184,7 @@ def test_twist_at_standstill_reproduces_the_kinematic_wheel_loads():
     With contact guidance the standing car rests on its free wheelsets, held by the creep
     forces regularised below ContactParams.min_creep_speed_m_per_s = 0.01 m/s. Tolerance
     0.15 % of Q0 (44 N) and 1.5 % of the largest load change: the remaining differences are
-    known and small (measured max 27 N): the contact points are 1.5065 m apart in the S1002/UIC60
+    known and small (measured max 25 N): the contact points are 1.5065 m apart in the S1002/UIC60
     table against the kinematic car's contact_spacing_m = 1.5 m (0.44 % of the load changes),
     contact guidance reports Q normal to the twisted rail plane rather than vertical (1 - cos of
     its 27 mrad roll: 10 N), and the wheelsets' creep drift."""
