@@ -215,23 +215,28 @@ def test_samples_are_met_and_zero_outside():
     assert isinstance(v.lateral_m, float) and v.cross_level_m == pytest.approx(4e-3)
 
 
-def test_spline_between_samples_is_smooth_and_accurate():
-    """A 3 m sine (the shortest wavelength of the PSDs) sampled every 0.25 m: the spline
-    reproduces it between the samples to 0.1 % of its amplitude (linear interpolation: 3.4 %,
-    the chord error 1 - cos(pi ds / L)), and its slope, which sets the rails' velocity under a
-    running car, is continuous across the samples (linear interpolation: it jumps at every one)."""
+def test_interpolation_is_smooth_accurate_and_does_not_overshoot():
+    """A 3 m sine (the shortest wavelength of the PSDs) sampled every 0.25 m: between the
+    samples the shape-preserving cubic is within 1.5 % of its amplitude (linear interpolation:
+    3.4 %, the chord error 1 - cos(pi ds / L); measured 0.99 %), and its slope, which sets the
+    rails' velocity under a running car, is continuous across the samples (linear interpolation:
+    it jumps at every one). Sparse file data do not ring: a bump at 30 m leaves 0-20 m at 0."""
     s = np.arange(0.0, 30.0 + 1e-9, 0.25)
     k = 2 * np.pi / 3.0
     t = TrackIrregularity(s, 1e-3 * np.sin(k * s), 0 * s, 0 * s, 0 * s)
-    mid = np.arange(3.0, 27.0, 0.01)  # away from the natural end conditions
+    mid = np.arange(3.0, 27.0, 0.01)
     err = np.abs(t(mid).lateral_m - 1e-3 * np.sin(k * mid)).max()
-    assert err < 1e-3 * 1e-3
+    assert err < 0.015 * 1e-3
     h = 1e-6
     inner = s[(s > 3.0) & (s < 27.0)]
     left = (t(inner).lateral_m - t(inner - h).lateral_m) / h
     right = (t(inner + h).lateral_m - t(inner).lateral_m) / h
-    # slope jumps below 1e-5 of the slope amplitude k A (finite-difference error ~ h k^2 A)
-    assert np.abs(right - left).max() < 1e-5 * k * 1e-3
+    # slope jumps below 1e-4 of the slope amplitude k A (finite-difference error ~ h y'')
+    assert np.abs(right - left).max() < 1e-4 * k * 1e-3
+    bump = TrackIrregularity([0.0, 20.0, 30.0, 40.0], [0.0, 0.0, 1e-3, 0.0], [0] * 4, [0] * 4,
+                             [0] * 4)
+    assert np.abs(bump(np.linspace(0.0, 20.0, 201)).lateral_m).max() == 0.0
+    assert np.abs(bump(np.linspace(0.0, 40.0, 401)).lateral_m).max() <= 1e-3
 
 
 def test_rail_offsets_signs_and_inverse():

@@ -26,14 +26,15 @@ Each rail's offset from its nominal position (:meth:`TrackIrregularity.rail_offs
     y_L = lateral + gauge/2      z_L = vertical - cross_level/2
     y_R = lateral - gauge/2      z_R = vertical + cross_level/2
 
-Evaluation: a natural cubic spline through the samples (continuous slope and curvature, so
-the rails' lateral and vertical velocities under a running car are continuous); **zero outside
-[s_0, s_end]** (ideal track before and after the described stretch). Linear interpolation, as
-the first version had, makes the rail velocity jump at every sample: at 20 m/s over samples
-0.25 m apart the creep forces then took a kick every 12.5 ms, and the largest lateral wheel
-force of the straight run moved by 4 % non-monotonically as the time step was halved (with the
-spline: 2983 / 2929 / 2920 N at 5 / 2.5 / 1.25 ms, docs/track_irregularities.md). A signal that does not start and end at zero therefore
-steps there; :meth:`TrackIrregularity.tapered` fades the ends in and out with a raised cosine.
+Evaluation: a shape-preserving piecewise cubic through the samples (PCHIP: continuous slope,
+so the rails' lateral and vertical velocities under a running car are continuous, and no
+overshoot beyond the samples); **zero outside [s_0, s_end]** (ideal track before and after the
+described stretch). Linear interpolation, as the first version had, makes the rail velocity
+jump at every sample: at 20 m/s over samples 0.25 m apart the creep forces then took a kick
+every 12.5 ms, and the largest lateral wheel force of the straight run moved by 4 %
+non-monotonically as the time step was halved (docs/track_irregularities.md). A signal that
+does not start and end at zero therefore steps there; :meth:`TrackIrregularity.tapered` fades
+the ends in and out with a raised cosine.
 
 File format (:meth:`TrackIrregularity.from_file`)
 -------------------------------------------------
@@ -120,7 +121,7 @@ from pathlib import Path
 from typing import NamedTuple, Sequence, Union
 
 import numpy as np
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import PchipInterpolator
 
 __all__ = [
     "CHANNELS",
@@ -287,9 +288,9 @@ def _as_array(name: str, values, n: int | None) -> np.ndarray:
 class TrackIrregularity:
     """Sampled irregularities over s [m]; all values in metres (signs: module docstring).
 
-    ``t(s)`` returns ``(lateral_m, vertical_m, cross_level_m, gauge_m)`` by a natural cubic
-    spline through the samples, zero outside ``[s_m[0], s_m[-1]]``; scalars in give floats out,
-    arrays give arrays.
+    ``t(s)`` returns ``(lateral_m, vertical_m, cross_level_m, gauge_m)`` by shape-preserving
+    piecewise cubic interpolation (PCHIP) through the samples, zero outside
+    ``[s_m[0], s_m[-1]]``; scalars in give floats out, arrays give arrays.
     """
 
     s_m: np.ndarray
@@ -311,10 +312,10 @@ class TrackIrregularity:
         object.__setattr__(self, "s_m", s)
         for name in COLUMNS[1:]:
             object.__setattr__(self, name, _as_array(name, getattr(self, name), s.size))
-        # one spline for the four columns: one evaluation per call (the car calls it every
+        # one interpolant for the four columns: one evaluation per call (the car calls it every
         # internal step)
         values = np.stack([getattr(self, n) for n in COLUMNS[1:]], axis=-1)
-        object.__setattr__(self, "_spline", CubicSpline(s, values, bc_type="natural"))
+        object.__setattr__(self, "_spline", PchipInterpolator(s, values, axis=0))
 
     # --- evaluation --------------------------------------------------------------------------
     def __call__(self, s_m) -> IrregularityValues:
