@@ -236,7 +236,7 @@ class CurveTest:
     docs/wheel_rail.md: adds Y, Y/Q, ΣY, wheelset displacement, angle of attack, flange contact
     to the outputs and the checks ``yq_max`` and ``sum_y_max``) or ``kinematic`` (wheelsets led
     along the track by a joint, no lateral wheel-rail forces: the paper's model, which
-    scenarios/curve_entry.yaml reproduces; a run takes about 1/3 of the time); ``friction_coefficient``: the contact model's μ (null: 0.36,
+    scenarios/curve_entry.yaml reproduces; a run takes about half the time); ``friction_coefficient``: the contact model's μ (null: 0.36,
     vehicle.params.ContactParams). Limits in the summary: Nadal (Y/Q)_lim = (tan γ - μ)/(1 + μ tan γ)
     with ``nadal_flange_angle_deg`` γ and ``nadal_friction`` μ (70°, 0.36: 1.20), Prud'homme
     ΣY_lim = α (10 kN + 2 Q0/3), α = ``prudhomme_alpha`` (EN 14363: 1, freight wagons 0.85).

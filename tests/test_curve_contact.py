@@ -114,6 +114,14 @@ def test_steady_canted_arc_rails_carry_the_unbalanced_centripetal_force(tmp_path
     assert row["yq_max"] == max(row[w] for w in wheels) == row["yq_max_1R"]
     assert 0.2 < row["yq_max"] < 1.2
     assert row["flange_fraction_1R"] > 0.3 and row["flange_fraction_1L"] == 0.0
+    # dqq_2m_max: the largest 2 m sliding mean of ΔQ/Q0 = (Q0 - Q)/Q0 from the first whole
+    # window on, recomputed here from the wheel loads; a mean never exceeds the sampled maximum
+    W = 2.0 / V
+    dqq = ((case["Q0_N"] - case["wheel_load_N"]) / case["Q0_N"]).transpose("time", "wheel").values
+    means = sliding_mean(t, dqq, W)[t >= t[0] + W - 1e-9]
+    assert row["dqq_2m_max"] == pytest.approx(np.nanmax(means), rel=1e-12)
+    assert row["dqq_2m_max_1L"] == pytest.approx(np.nanmax(means[:, 0]), rel=1e-12)
+    assert row["dqq_2m_max"] <= row["dqq_max"]
     # the 2 m sliding mean of ΣY per wheelset never exceeds the largest sampled |ΣY|
     assert row["sum_y_max_N"] <= np.nanmax(np.abs(case["wheelset_lateral_force_N"].values)) + 1e-9
     # the CSV layout of a contact run: per-wheel Y, per-wheelset ΣY, displacement, angle of attack
@@ -142,9 +150,12 @@ def test_kinematic_scenario_refuses_lateral_force_checks(tmp_path, check):
         load_scenario(path)
     assert info.value.path == "checks[1]" and "needs curve.guidance: contact" in info.value.reason
     assert cli.main(["validate", str(path)]) == 2
-    # dqq_max needs no lateral force: accepted with kinematic guidance; yq_max with contact
-    data["checks"] = ["dqq_max <= 0.6", "dqq_max[1L] <= 0.6"]
-    assert len(load_scenario(write_scenario(tmp_path, data)).checks) == 2
+    # dqq_max and dqq_2m_max need no lateral force: accepted with kinematic guidance; yq_max
+    # with contact
+    data["checks"] = ["dqq_max <= 0.6", "dqq_max[1L] <= 0.6", "dqq_2m_max[1R] <= 0.6"]
+    checks = load_scenario(write_scenario(tmp_path, data)).checks
+    assert [(c.metric, c.wheel) for c in checks] == [("dqq_max", None), ("dqq_max", "1L"),
+                                                     ("dqq_2m_max", "1R")]
     data["curve"]["guidance"] = "contact"
     data["checks"] = [check]
     assert load_scenario(write_scenario(tmp_path, data)).checks[0].metric in ("yq_max", "sum_y_max")

@@ -446,8 +446,8 @@ class TrackIrregularity:
 
         Channels not in ``channels`` are zero (each listed channel keeps its own random stream,
         so leaving one out does not change the others). ``ds_m`` must be at most half the
-        shortest wavelength (no aliasing); linear interpolation between samples needs about a
-        tenth of it to stay within ~5 % of the amplitude. ``taper_m`` > 0 applies
+        shortest wavelength (no aliasing); the shape-preserving cubic between samples is within
+        ~1 % of a harmonic's amplitude at 12 samples per wavelength. ``taper_m`` > 0 applies
         :meth:`tapered`. Method and conventions: module docstring.
         """
         kind = canonical_kind(kind)

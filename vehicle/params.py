@@ -241,16 +241,20 @@ class ContactParams:
     min_creep_speed_m_per_s: float = 0.01
     # A wheel counts as in flange contact (:meth:`MetroCar.flange_contact`) when its contact
     # angle exceeds this: 0.7 rad (40 deg) separates the tread and flange root (S1002 on UIC60
-    # 1:40: up to 0.53 rad before the jump) from the flange flank (1.22 rad, 70 deg).
+    # 1:40: up to 0.67 rad just before the flank) from the flange flank (1.22 rad, 70 deg). The
+    # law reads the table smoothed over 0.1 mm (table_smoothing_mm), so its angle passes 0.7 rad
+    # continuously within ~0.1 mm of the jump at 6.26-6.29 mm: there the flag is a threshold on
+    # a blend.
     flange_angle_rad: float = 0.7
     # Damping of the normal contact force [N s/m], along the normal, per wheel. The track is
     # rigid in this model, so the contact damping stands in for the track's (rail pads, ballast),
     # which damps the wheelset-on-track modes far more than the Hertz contact itself: 2e5 gives
     # the ~250 Hz wheelset-on-contact modes a damping ratio of ~0.1 (contact stiffness ~1e9 N/m,
     # 800 kg). With the car's vertical value 5e4 (ratio ~0.03) a wheel on the flange root has a
-    # friction-driven flutter of those modes: the linearised flanging wheelset's eigenvalues
-    # reach +90 /s (tests/test_contact_stability.py), which at 5 ms steps only the integrator's
-    # numerical damping hid (docs/wheel_rail.md, "Flange contact and step convergence").
+    # friction-driven flutter of those modes, even on the smoothed table: the linearised
+    # flanging wheelset's eigenvalues reach +82 /s (vehicle/wheelrail/stability.py), which at
+    # 5 ms steps only the integrator's numerical damping hid (docs/wheel_rail.md, "Flange
+    # contact and step convergence").
     normal_damping_N_s_per_m: float = 2.0e5
     # Gaussian smoothing of the contact table the force law reads, standard deviation in mm of
     # wheelset lateral displacement (vehicle.wheelrail.contact_law.ContactLawTable: the rigid

@@ -27,11 +27,14 @@ contact position yc (track frame), and the wheelset's rigid-contact roll0 and ri
 
 * **Normal force** (Hertz, unilateral, along the contact normal): the contact point of the
   actual wheelset is below the rigid-contact one by the vertical overlap
-  ``delta = (dz0 - z) + l (roll0 - roll)``, ``l = yc - y`` (lateral lever from the wheelset
-  centre); the overlap along the normal is ``delta cos(gamma)`` (two tangent planes inclined by
+  ``delta = (dz0 - z) + a (roll0 - roll)`` with the roll arm ``a = l - s r tan(gamma)``,
+  ``l = yc - y`` (lateral lever from the wheelset centre), s = +1 left, -1 right (rolling moves
+  the contact point up by l and sideways by r per radian; along the normal that is the moment arm
+  of N); the overlap along the normal is ``delta cos(gamma)`` (two tangent planes inclined by
   gamma) and ``N = C_H (delta cos gamma)^1.5 + c d(delta cos gamma)/dt``, clipped at 0, and 0 when
-  delta <= 0. C_H and c are those of the car's vertical contact (``VehicleParams``), so the
-  stiffness is the car's along the normal instead of the vertical.
+  delta <= 0. C_H is the car's vertical Hertz constant (``VehicleParams``), so the stiffness is
+  the car's along the normal instead of the vertical; c is
+  ``ContactParams.normal_damping_N_s_per_m`` (2e5 N s/m, :class:`WheelsetParams`).
 * **Creepages** (:func:`vehicle.wheelrail.creep.creepages` extended to the curve; relative
   velocity of wheel to rail at the contact over V)::
 
@@ -233,11 +236,12 @@ class ContactLawTable:
     where the contact runs through the near-conformal flange root onto the flank. Read as it
     is, it gives a wheelset whose flange-contact modes grow: linearised about its steady
     rolling state pressed against the flange (continuous model, no integrator;
-    :mod:`vehicle.wheelrail.stability`, ``tests/test_contact_stability.py``) its modes above
-    100 Hz grow at up to +390 /s with 0.1 mm rows and +1000 /s with 0.01 mm rows at the jumps,
-    and normal damping up to 1e6 N s/m does not remove that. Smoothed over 0.1 mm with the
-    normal damping of :class:`~vehicle.params.ContactParams` (2e5 N s/m) they are damped at
-    every load (<= -98 /s); either alone is not enough (smoothed, 5e4 N s/m: +82 /s).
+    :mod:`vehicle.wheelrail.stability`, ``tests/test_contact_stability.py``; 0 to 60 kN of
+    lateral load in 4 kN steps) its modes above 100 Hz grow at up to +386 /s with 0.1 mm rows
+    and +875 /s with 0.01 mm rows at the jumps (+105 /s with the creep forces off), and normal
+    damping up to 1e6 N s/m does not remove that. Smoothed over 0.1 mm with the normal damping
+    of :class:`~vehicle.params.ContactParams` (2e5 N s/m) they are damped at every load
+    (<= -98 /s); either alone is not enough (smoothed, 5e4 N s/m: +82 /s).
     Physically the smoothing stands for the elastic contact spreading over the conformal
     flange root, where wheel and rail stay within a few um of each other over 4 mm of the
     profiles while the wheel sinks ~50 um into the rail: one rigid contact point does not

@@ -19,14 +19,16 @@ Model
 * **Contact**: one ``ObjectGenericODE2`` on the body node and the spin node (no mass of its
   own) whose force user function is the contact law of both wheels: Hertz normal force along
   the contact normal, Kalker linear creep forces with Shen-Hedrick-Elkins saturation.
-* **Table lookup**: the contact table (439 rows for the default pair) enters piecewise linearly
+* **Table lookup**: the law's table (:class:`~vehicle.wheelrail.contact_law.ContactLawTable`:
+  the contact table smoothed over 0.1 mm, 2401 rows every 0.01 mm) enters piecewise linearly
   in y: before every step (PreStep user function) the table interval holding the wheelset's
   current y is looked up and its start value and slope handed to the law (only when the interval
-  changed: ~130 times per simulated second at 10 m/s and 3 mm amplitude); inside the step the
+  changed: ~450 times per simulated second at 10 m/s and 3 mm amplitude); inside the step the
   law uses value + slope (y - y_i), exact on that interval and extrapolated beyond it for the
-  rest of the step (0.1 mm intervals, 0.01 mm across the contact jumps; y moves up to
-  ~0.04 mm per 2 ms step at 3 mm amplitude). exudyn's symbolic expressions cannot index a table
-  by a state; this way they need not. A wheelset leaving the table stops the run with an error.
+  rest of the step (y moves up to ~0.04 mm per 2 ms step at 3 mm amplitude, across a few
+  intervals of the smoothed table, whose slope changes little between them). exudyn's symbolic
+  expressions cannot index a table by a state; this way they need not. A wheelset leaving the
+  table stops the run with an error.
 * **Force law as user function**: ``force_law="python"`` (default) calls
   :func:`~vehicle.wheelrail.contact_law.generalized_forces` with float math as a Python user
   function; ``"symbolic"`` records the same function as an exudyn symbolic user function (an
