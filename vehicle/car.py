@@ -277,7 +277,8 @@ class MetroCar:
         spectral_radius: generalized-alpha spectral radius at infinite frequency, 0 < rho <= 1
             (numerical damping of the ~250 Hz wheelset-on-contact modes).
         newton_abs_tol: Newton absolute tolerance on the residual (force scale [N]).
-        newton_rel_tol: Newton tolerance relative to the initial residual of the step.
+        newton_rel_tol: Newton tolerance relative to the initial residual of the step; None:
+            1e-8 with kinematic guidance, :attr:`CONTACT_NEWTON_REL_TOL` with contact guidance.
         reuse_jacobian: reuse the Newton Jacobian across :meth:`advance` calls (see module doc).
         carbody_load: build an external force and torque on the carbody, set with
             :meth:`set_carbody_load` (zero until then); e.g. a static roll moment or wind.
@@ -315,13 +316,20 @@ class MetroCar:
     #: changed by more than this since it was computed [rad] (see :meth:`advance`; with contact
     #: guidance at the end of the macro-step that turned past it, see :meth:`_refresh_jacobian`)
     JACOBIAN_HEADING_TOL_RAD = 0.01
+    #: Newton's relative tolerance with contact guidance. A step's initial residual is ~M a
+    #: there (~30 kN in the paper's curve) against ~700 kN with kinematic guidance, where the
+    #: guidance constraints dominate it, so 1e-8 asked the contact for ~3e-4 N, 20 times the
+    #: kinematic car's ~7e-3 N, and took 5.0 Newton iterations per step against 3.2. 1e-6
+    #: (~3e-2 N) takes 3.9 and moves the wheel loads and lateral forces of that curve by at most
+    #: 0.05 N (roll 7e-9 rad), against ~10 N between 5 and 2.5 ms steps (pneumorail verify).
+    CONTACT_NEWTON_REL_TOL = 1e-6
 
     def __init__(self, params: VehicleParams,
                  rail_height_m: Callable[[float], np.ndarray] | None = None,
                  step_s: float = 5e-3, *, track: TrackGeometry | None = None,
                  speed_m_per_s: float = 0.0, start_s_m: float | None = None,
                  spectral_radius: float = 0.8,
-                 newton_abs_tol: float = 1e-4, newton_rel_tol: float = 1e-8,
+                 newton_abs_tol: float = 1e-4, newton_rel_tol: float | None = None,
                  reuse_jacobian: bool = True, carbody_load: bool = False,
                  guidance: str = "kinematic", contact: ContactParams | None = None,
                  irregularity: Callable[[np.ndarray], tuple] | None = None,
@@ -382,6 +390,8 @@ class MetroCar:
         self.mbs.Assemble()
         if self._contact_mode:
             self._init_contact_state()
+        if newton_rel_tol is None:
+            newton_rel_tol = self.CONTACT_NEWTON_REL_TOL if self._contact_mode else 1e-8
         self._init_solver(spectral_radius, newton_abs_tol, newton_rel_tol, reuse_jacobian)
         if self._maxwell:
             self._maxwell_t = 0.0  # time of the Maxwell states (last accepted step end)
