@@ -60,9 +60,9 @@ def _attrs(da: xr.DataArray, **attrs) -> xr.DataArray:
 def wheel_rail_series(ds: xr.Dataset, curve: CurveTest) -> None:
     """Add the running-safety series to a curve run's Dataset (in place): ``dqq`` (ΔQ/Q0 per
     wheel, Q0 the static wheel load at t = 0, mean of the wheelset's two wheels, EN 14363),
-    ``dqq_2m`` (its 2 m sliding mean, NaN for the first 2 m) and, with contact guidance, ``y_over_q`` (Y/Q per wheel; 0 on a wheel that carries nothing),
-    ``y_over_q_2m`` and ``sum_y_2m_N`` (their EN 14363 2 m sliding means, NaN for the first
-    2 m)."""
+    ``dqq_2m`` (its 2 m sliding mean, NaN for the first 2 m) and, with contact guidance,
+    ``y_over_q`` (Y/Q per wheel; 0 on a wheel that carries nothing), ``y_over_q_2m`` and
+    ``sum_y_2m_N`` (their EN 14363 2 m sliding means, NaN for the first 2 m)."""
     t = ds["time"].values
     add_wheel_unloading(ds)
     W = sliding_window_s(curve)
@@ -137,7 +137,8 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         row = summary_row(case, curve)
         rows.append(row)
         cases.append(case_metrics(row))
-    headline = ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg", "dqq_max", "dqq_2m_max")
+    headline = ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg", "dqq_max",
+                "dqq_2m_max")
     headline += CONTACT_COLUMNS if curve.contact else ()
     metrics = {m: largest(r[m] for r in rows) for m in headline} if rows else {}
     shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg")
