@@ -227,22 +227,26 @@ def _irregularity(spec: IrregularitySpec, track_length_m: float, start_m: float)
 @dataclass(frozen=True)
 class CurveTest:
     """Curve entry (paper §4.2, Fig. 9): straight, clothoid transition (curvature and cant ramp
-    linearly: on canted track a twisted transition), circular arc, at constant speed. The car starts
-    at rest relative to the straight (rear wheelset at s = 0), so ``straight_m`` must hold the
-    whole car. ``valve_settings``: runs with the levelling and differential valves disconnected
-    (false) and connected (true). ``window_s``: final window over which the end values (roll,
-    bellow crushing) are averaged (default 5 s, or the whole run if shorter). ``guidance``:
-    ``contact`` (default: free wheelsets on the S1002/UIC60 contact with Kalker creep forces,
-    docs/wheel_rail.md: adds Y, Y/Q, ΣY, wheelset displacement, angle of attack, flange contact
-    to the outputs and the checks ``yq_max`` and ``sum_y_max``) or ``kinematic`` (wheelsets led
-    along the track by a joint, no lateral wheel-rail forces: the paper's model, which
-    scenarios/curve_entry.yaml reproduces; a run takes about half the time); ``friction_coefficient``: the contact model's μ (null: 0.36,
-    vehicle.params.ContactParams). Limits in the summary: Nadal (Y/Q)_lim = (tan γ - μ)/(1 + μ tan γ)
-    with ``nadal_flange_angle_deg`` γ and ``nadal_friction`` μ (70°, 0.36: 1.20), Prud'homme
-    ΣY_lim = α (10 kN + 2 Q0/3), α = ``prudhomme_alpha`` (EN 14363: 1, freight wagons 0.85).
-    ``irregularity``: null (design track) or {psd: erri_b176_low | erri_b176_high | fra_1 ...
-    fra_6, seed, wavelength_range_m: [3, 150], channels, ds_m, start_m, taper_m} or {file: path
-    relative to the scenario} (see IrregularitySpec in cosim/experiments.py)."""
+    linearly: on canted track a twisted transition), circular arc, at constant speed. The car
+    starts at rest relative to the straight (rear wheelset at s = 0), so ``straight_m`` must
+    hold the whole car. ``valve_settings``: runs with the levelling and differential valves
+    disconnected (false) and connected (true). ``window_s``: final window over which the end
+    values (roll, bellow crushing) are averaged (default 5 s, or the whole run if shorter).
+    ``guidance``: ``contact`` (default: free wheelsets on the S1002/UIC60 contact with Kalker
+    creep forces, docs/wheel_rail.md: adds Y, Y/Q, ΣY, wheelset displacement, angle of attack,
+    flange contact to the outputs and the checks ``yq_max`` and ``sum_y_max``) or ``kinematic``
+    (wheelsets led along the track by a joint, no lateral wheel-rail forces: the paper's model,
+    which scenarios/curve_entry.yaml reproduces; a run takes about half the time);
+    ``friction_coefficient``: the contact model's μ (null: 0.36, vehicle.params.ContactParams);
+    ``contact_damping_N_s_per_m``: its normal damping (null: 2e5, standing in for the rigid
+    track's damping); ``contact_smoothing_mm``: the Gaussian smoothing of its contact table
+    (null: 0.1 mm; 0: the rigid table; docs/wheel_rail.md, "Flange contact and step
+    convergence", for what both change). Limits in the summary: Nadal (Y/Q)_lim = (tan γ - μ)/(1
+    + μ tan γ) with ``nadal_flange_angle_deg`` γ and ``nadal_friction`` μ (70°, 0.36: 1.20),
+    Prud'homme ΣY_lim = α (10 kN + 2 Q0/3), α = ``prudhomme_alpha`` (EN 14363: 1, freight wagons
+    0.85). ``irregularity``: null (design track) or {psd: erri_b176_low | erri_b176_high | fra_1
+    ... fra_6, seed, wavelength_range_m: [3, 150], channels, ds_m, start_m, taper_m} or {file:
+    path relative to the scenario} (see IrregularitySpec in cosim/experiments.py)."""
 
     speed_m_per_s: float = 10.0
     straight_m: float = 20.0
@@ -256,6 +260,8 @@ class CurveTest:
     window_s: Optional[float] = None
     guidance: str = "contact"
     friction_coefficient: Optional[float] = None
+    contact_damping_N_s_per_m: Optional[float] = None
+    contact_smoothing_mm: Optional[float] = None
     nadal_flange_angle_deg: float = 70.0
     nadal_friction: float = 0.36
     prudhomme_alpha: float = 1.0
@@ -276,10 +282,12 @@ class CurveTest:
                                          cant_rad=self.cant_rad, direction=self.direction)
 
     def contact_params(self) -> ContactParams:
-        """The contact model's parameters (defaults, with ``friction_coefficient`` if given)."""
-        if self.friction_coefficient is None:
-            return ContactParams()
-        return ContactParams(friction_coefficient=self.friction_coefficient)
+        """The contact model's parameters: the defaults, with the keys the scenario gives."""
+        given = {name: value for name, value in (
+            ("friction_coefficient", self.friction_coefficient),
+            ("normal_damping_N_s_per_m", self.contact_damping_N_s_per_m),
+            ("table_smoothing_mm", self.contact_smoothing_mm)) if value is not None}
+        return ContactParams(**given)
 
     def track_irregularity(self, vehicle: VehicleParams) -> Optional[TrackIrregularity]:
         """The irregularity along :meth:`track` (None: design track); a PSD irregularity starts

@@ -385,9 +385,9 @@ def _curve_contact(curve: CurveTest, path) -> None:
     if mu is not None and not 0.0 < mu <= 1.0:
         raise ScenarioError(path, ["curve", "friction_coefficient"], f"expected a wheel-rail friction coefficient in "
                                                                      f"(0, 1] (dry rail 0.3-0.5), got {mu:g}")
-    if mu is not None and not curve.contact:
-        raise ScenarioError(path, ["curve", "friction_coefficient"], "the contact model's friction needs "
-                                                                     "curve.guidance: contact")
+    for key in ("friction_coefficient", "contact_damping_N_s_per_m", "contact_smoothing_mm"):
+        if getattr(curve, key) is not None and not curve.contact:
+            raise ScenarioError(path, ["curve", key], "a parameter of the contact model needs curve.guidance: contact")
     if not 0.0 < curve.nadal_flange_angle_deg < 90.0:
         raise ScenarioError(path, ["curve", "nadal_flange_angle_deg"], f"expected a flange angle in (0, 90) degrees, "
                                                                        f"got {curve.nadal_flange_angle_deg:g}")

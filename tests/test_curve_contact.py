@@ -19,6 +19,7 @@ from cosim.curve import simulate, summary_row
 from cosim.scenario import load_scenario
 from cosim.schema import ScenarioError
 from cosim.series import case_columns
+from vehicle.params import ContactParams
 from helpers import ROOT, SCENARIOS, write_scenario
 
 P_MASS_KG = 17000.0 + 2 * 1900.0 + 4 * 800.0     # carbody, bogie frames, wheelsets (paper Table 3)
@@ -209,6 +210,10 @@ BAD = {
     "unknown guidance": ({"guidance": "magnetic"}, "curve.guidance", "kinematic, contact"),
     "friction too high": ({"friction_coefficient": 2.0}, "curve.friction_coefficient", "(0, 1]"),
     "friction with kinematic": ({"guidance": "kinematic"}, "curve.friction_coefficient", "needs curve.guidance"),
+    "damping negative": ({"contact_damping_N_s_per_m": -1.0}, "curve.contact_damping_N_s_per_m", "[0, 1e+07]"),
+    "smoothing too wide": ({"contact_smoothing_mm": 5.0}, "curve.contact_smoothing_mm", "[0, 1] mm"),
+    "smoothing with kinematic": ({"guidance": "kinematic", "friction_coefficient": None, "contact_smoothing_mm": 0.2},
+                                 "curve.contact_smoothing_mm", "needs curve.guidance"),
     "flange angle": ({"nadal_flange_angle_deg": 95.0}, "curve.nadal_flange_angle_deg", "(0, 90)"),
     "nadal mu above tan": ({"nadal_flange_angle_deg": 10.0, "nadal_friction": 0.5}, "curve.nadal_friction", "> 0"),
     "alpha": ({"prudhomme_alpha": 0.0}, "curve.prudhomme_alpha", "(0, 1]"),
@@ -233,6 +238,16 @@ BAD = {
     "unknown irregularity key": ({"irregularity": {"psd": "fra_4", "amplitude": 1}}, "curve.irregularity.amplitude",
                                  "unknown key"),
 }
+
+
+def test_contact_model_keys_reach_the_car(tmp_path):
+    """curve.contact_damping_N_s_per_m and curve.contact_smoothing_mm set the contact law's
+    ContactParams; null keeps its defaults."""
+    s = load(tmp_path, scenario_data(contact_damping_N_s_per_m=4e5, contact_smoothing_mm=0.2))
+    cp = s.curve.contact_params()
+    assert (cp.normal_damping_N_s_per_m, cp.table_smoothing_mm, cp.friction_coefficient) == (4e5, 0.2, 0.36)
+    s = load(tmp_path, scenario_data(friction_coefficient=None))
+    assert s.curve.contact_params() == ContactParams()
 
 
 @pytest.mark.parametrize("name", sorted(BAD))
