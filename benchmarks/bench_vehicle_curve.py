@@ -10,6 +10,7 @@ wheel loads, the carbody roll and lateral offset.
     python benchmarks/bench_vehicle_curve.py            # 3 runs per case (~1 min)
     python benchmarks/bench_vehicle_curve.py --quick    # 1 run of the default case
     python benchmarks/bench_vehicle_curve.py --contact  # contact against kinematic guidance
+    python benchmarks/bench_vehicle_curve.py --ceiling  # ... and without the law's Python time
 
 ``--contact`` (issue 11): the same curve entry with ``guidance="contact"`` (free wheelsets on
 the S1002/UIC60 contact) and with the default kinematic guidance, alternately, 5 ms macro and
@@ -81,6 +82,41 @@ def run(macro_s: float, step_s: float, horizon_s: float = HORIZON_S,
             "Q_1R": car.wheel_loads_N()[1], "Y_1R": car.lateral_wheel_forces_N()[1]}
 
 
+def law_ceiling(runs: int, horizon_s: float) -> None:
+    """What compiling the contact law could gain: the time spent inside the law's Python force
+    and Jacobian user functions, timed around the calls, and the contact/kinematic ratio with
+    that time taken out (medians of ``runs`` alternating runs)."""
+    walls = {"kinematic": [], "contact": []}
+    law, jac = [], []
+    for _ in range(runs):
+        for guidance in walls:
+            car = MetroCar(VehicleParams(), step_s=5e-3, track=paper_track(),
+                           speed_m_per_s=SPEED_M_PER_S, guidance=guidance)
+            spent = {"forces": 0.0, "jacobian": 0.0}
+            if guidance == "contact":
+                for name in spent:
+                    inner = getattr(car._wr, name)
+
+                    def timed(*args, inner=inner, name=name):
+                        t0 = time.perf_counter()
+                        out = inner(*args)
+                        spent[name] += time.perf_counter() - t0
+                        return out
+
+                    setattr(car._wr, name, timed)
+            wall, _ = drive(car, 5e-3, horizon_s, lambda c: (c.wheel_loads_N(), c.carbody_roll_rad()))
+            walls[guidance].append(wall)
+            if guidance == "contact":
+                law.append(spent["forces"])
+                jac.append(spent["jacobian"])
+    kin, con = statistics.median(walls["kinematic"]), statistics.median(walls["contact"])
+    f, j = statistics.median(law), statistics.median(jac)
+    print(f"curve entry, {horizon_s:g} s, 5 ms steps, median of {runs}: kinematic {kin:.2f} s, "
+          f"contact {con:.2f} s (law {f:.2f} s, Jacobian {j:.2f} s)")
+    print(f"contact / kinematic: {con / kin:.2f}; without the law's time {(con - f) / kin:.2f}; "
+          f"without the law's and the Jacobian's {(con - f - j) / kin:.2f}")
+
+
 def compare_guidance(runs: int, horizon_s: float) -> None:
     """Contact against kinematic guidance on the curve entry (see the module doc)."""
     print(f"curve entry, {horizon_s:g} s simulated at {SPEED_M_PER_S:g} m/s, 5 ms steps; "
@@ -106,10 +142,15 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="1 run of the 5 ms / 5 ms case")
     ap.add_argument("--contact", action="store_true",
                     help="contact against kinematic guidance (issue 11)")
+    ap.add_argument("--ceiling", action="store_true",
+                    help="contact: the ratio to kinematic without the law's Python time")
     ap.add_argument("--runs", type=int, default=3, help="runs per guidance with --contact")
     ap.add_argument("--horizon", type=float, default=HORIZON_S,
                     help="simulated seconds with --contact")
     args = ap.parse_args()
+    if args.ceiling:
+        law_ceiling(args.runs, args.horizon)
+        return
     if args.contact:
         compare_guidance(args.runs, args.horizon)
         return
