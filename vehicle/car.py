@@ -961,23 +961,28 @@ class MetroCar:
         self._wr_index = np.array(idx)
         self._set_contact_track(0.0)
 
-    def _contact_rail_values(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """(8,) lateral rail offsets e (+ left) and (8,) rail height offsets zr (+ up, normal to
-        the track plane) under each wheel at time t (contact guidance; the cant is in the track
-        frame, not here)."""
-        z = np.zeros(8) if self._rail_fn is None else np.array(self._rail_fn(t), dtype=float)
-        if z.shape != (8,):
-            raise ValueError(f"rail_height_m(t) must return shape (8,), got {z.shape}")
-        e = np.zeros(8)
+    def _contact_rail_values(self, times) -> tuple[np.ndarray, np.ndarray]:
+        """(n, 8) lateral rail offsets e (+ left) and (n, 8) rail height offsets zr (+ up, normal
+        to the track plane) under each wheel at the n ``times`` (contact guidance; the cant is in
+        the track frame, not here), the irregularity evaluated once for all of them."""
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        if self._rail_fn is None:
+            z = np.zeros((times.size, 8))
+        else:
+            z = np.array([self._rail_fn(float(t)) for t in times], dtype=float)
+            if z.shape != (times.size, 8):
+                raise ValueError(f"rail_height_m(t) must return shape (8,), got {z.shape[1:]}")
+        e = np.zeros((times.size, 8))
         if self._irr is not None:
-            lat, ver, cross, gauge = self._irregularity_at(t)
-            e[0::2], e[1::2] = lat + 0.5 * gauge, lat - 0.5 * gauge
-            z[0::2] += ver - 0.5 * cross
-            z[1::2] += ver + 0.5 * cross
+            lat, ver, cross, gauge = self._irregularity_at(times[:, None])
+            e[:, 0::2], e[:, 1::2] = lat + 0.5 * gauge, lat - 0.5 * gauge
+            z[:, 0::2] += ver - 0.5 * cross
+            z[:, 1::2] += ver + 0.5 * cross
         return e, z
 
-    def _irregularity_at(self, t: float) -> tuple[np.ndarray, ...]:
-        """(lateral, vertical, cross_level, gauge), each (4,), under the wheelsets at time t."""
+    def _irregularity_at(self, t) -> tuple[np.ndarray, ...]:
+        """(lateral, vertical, cross_level, gauge), each shaped like s = s0 + v t: (4,) under the
+        wheelsets at a time t, (n, 4) for times of shape (n, 1)."""
         s = self._s0_wheelset + self.speed_m_per_s * t
         out = tuple(np.broadcast_to(np.asarray(v, dtype=float), s.shape).astype(float)
                     for v in self._irr(s))
@@ -1001,9 +1006,8 @@ class MetroCar:
         if self._rail_fn is None and self._irr is None:
             self._wr.set_track(state)
             return
-        e1, z1 = self._contact_rail_values(t)
         d = self.RAIL_RATE_DT_S
-        (ep, zp), (em, zm) = self._contact_rail_values(t + d), self._contact_rail_values(t - d)
+        (em, e1, ep), (zm, z1, zp) = self._contact_rail_values((t - d, t, t + d))
         ed, zd = (ep - em) / (2.0 * d), (zp - zm) / (2.0 * d)
         rails = [tuple((e1[j], ed[j], z1[j], zd[j]) for j in (2 * i, 2 * i + 1))
                  for i in range(4)]
