@@ -179,6 +179,13 @@ def test_flange_contact_arises_from_the_geometry(table):
     jumps = [j for j in table.contact_jumps() if j["side"] == "L" and j["y_from_mm"] > 0]
     # located to the 0.01 mm of the refined cells (ContactTable.derive)
     assert [j["y_to_mm"] for j in jumps] == pytest.approx([0.21, 4.85, 6.26], abs=1e-9)
+    # independently: each lies inside the 0.1 mm cell where the unrefined derivation jumps
+    coarse = ContactTable.derive(read_profile(DEFAULT_WHEEL), read_profile(DEFAULT_RAIL),
+                                 default_setup(), refine_dy_mm=None).contact_jumps()
+    coarse = [j for j in coarse if j["side"] == "L" and j["y_from_mm"] > 0]
+    assert len(coarse) == len(jumps)
+    for fine, cell in zip(jumps, coarse):
+        assert cell["y_from_mm"] - 1e-9 <= fine["y_from_mm"] < fine["y_to_mm"] <= cell["y_to_mm"] + 1e-9
 
 
 def test_equivalent_conicity_definitions(table):
