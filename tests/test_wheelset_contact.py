@@ -68,16 +68,16 @@ def test_cone_table_is_exact():
 def test_creep_forces_dissipate_for_random_creepages(s1002, scale):
     st, geo, V = _random_states(s1002, 4000, seed=int(scale * 10), scale=scale)
     for w in wheelset_forces(NUMPY, st, geo, V, 0.0, P, s1002.reference_load_N):
-        Fx, Fy, Mz = w["eps"] * w["fx"], w["eps"] * w["fy"], w["eps"] * w["mz"]
+        Fx, Fy, Mz = w.eps * w.fx, w.eps * w.fy, w.eps * w.mz
         # power dissipated in the contact, -(F . xi + M_z phi) V: Kalker's C23 terms cancel in
         # it and the saturation scales all three by the same eps > 0, so >= 0 up to rounding
-        power = -(Fx * w["xi_x"] + Fy * w["xi_y"] + Mz * w["phi"]) * V
-        scale_W = (np.abs(Fx * w["xi_x"]) + np.abs(Fy * w["xi_y"]) + np.abs(Mz * w["phi"])) * V
+        power = -(Fx * w.xi_x + Fy * w.xi_y + Mz * w.phi) * V
+        scale_W = (np.abs(Fx * w.xi_x) + np.abs(Fy * w.xi_y) + np.abs(Mz * w.phi)) * V
         assert np.all(power >= -1e-12 * scale_W)
         # (N may be 0 here: a fast-separating random state unloads the damped contact)
-        assert np.all(w["N"] >= 0) and np.all((w["eps"] > 0) & (w["eps"] <= 1))
+        assert np.all(w.N >= 0) and np.all((w.eps > 0) & (w.eps <= 1))
         # the longitudinal force opposes the longitudinal creepage
-        assert np.all(Fx * w["xi_x"] <= 0)
+        assert np.all(Fx * w.xi_x <= 0)
 
 
 def test_saturation_caps_the_resultant_at_mu_N(s1002):
@@ -85,10 +85,10 @@ def test_saturation_caps_the_resultant_at_mu_N(s1002):
     for scale in (1.0, 30.0, 3000.0):
         st, geo, V = _random_states(s1002, 4000, seed=7, scale=scale)
         for w in wheelset_forces(NUMPY, st, geo, V, 0.0, P, s1002.reference_load_N):
-            F = w["eps"] * np.hypot(w["fx"], w["fy"])
-            assert np.all(F <= mu * w["N"] * (1 + 1e-12))
+            F = w.eps * np.hypot(w.fx, w.fy)
+            assert np.all(F <= mu * w.N * (1 + 1e-12))
             if scale == 3000.0:  # creepages ~ 1: full slip, the resultant is mu N
-                np.testing.assert_allclose(F, mu * w["N"], rtol=1e-12)
+                np.testing.assert_allclose(F, mu * w.N, rtol=1e-12)
 
 
 def test_law_reproduces_the_creep_module(s1002_rigid):
@@ -107,7 +107,7 @@ def test_law_reproduces_the_creep_module(s1002_rigid):
             b_side = sgn * (getattr(row, "yc_" + side) - sti.y)
             xi = creep.creepages(V, sti.y_t, sti.yaw, sti.yaw_t, sti.spin_t, r, gam, b_side,
                                  "left" if side == "L" else "right", roll_rate=sti.roll_t)
-            np.testing.assert_allclose((w["xi_x"], w["xi_y"], w["phi"]), xi, rtol=1e-9,
+            np.testing.assert_allclose((w.xi_x, w.xi_y, w.phi), xi, rtol=1e-9,
                                        atol=1e-15)
             # Hertz ellipse at this N from the interpolated curvatures of the two rows around y
             k = np.searchsorted(t.columns["y_ws_mm"], 1e3 * sti.y) - 1
@@ -119,16 +119,16 @@ def test_law_reproduces_the_creep_module(s1002_rigid):
                 delta = c[f"gamma_{side}_rad"][j] - sgn * c["roll_rad"][j]
                 A = math.cos(delta) / (2 * c[f"r_{side}_m"][j])
                 B = 0.5 * (c[f"kw_{side}_1pm"][j] + c[f"kr_{side}_1pm"][j])
-                a, b = creep.hertz_semi_axes(w["N"], A, B)
-                ref.append(np.array(creep.creep_forces(*xi, N=w["N"], mu=P.friction_coefficient,
+                a, b = creep.hertz_semi_axes(w.N, A, B)
+                ref.append(np.array(creep.creep_forces(*xi, N=w.N, mu=P.friction_coefficient,
                                                        a=a, b=b)))
             # the law interpolates the coefficients (not the ellipse) linearly between rows:
             # compare with the same interpolation of the two rows' forces, away from saturation
             # (eps within 1 % of 1, where the forces are linear in the coefficients)
-            if w["eps"] > 0.99:
+            if w.eps > 0.99:
                 expect = (1 - f) * ref[0] + f * ref[1]
-                got = np.array([w["eps"] * w["fx"], w["eps"] * w["fy"], w["eps"] * w["mz"]])
-                np.testing.assert_allclose(got, expect, rtol=2e-3, atol=1e-6 * w["N"])
+                got = np.array([w.eps * w.fx, w.eps * w.fy, w.eps * w.mz])
+                np.testing.assert_allclose(got, expect, rtol=2e-3, atol=1e-6 * w.N)
 
 
 def test_generalized_forces_are_the_contact_forces_and_moments(s1002):
@@ -141,15 +141,15 @@ def test_generalized_forces_are_the_contact_forces_and_moments(s1002):
     M = np.zeros((3, 500))
     cy, sy = np.cos(st.yaw), np.sin(st.yaw)
     for w in wheelset_forces(NUMPY, st, geo, V, kappa, P, s1002.reference_load_N):
-        s, cg, sg, l, r = w["sign"], w["cos_gamma"], w["sin_gamma"], w["lever"], w["r"]
+        s, cg, sg, l, r = w.sign, w.cos_gamma, w.sin_gamma, w.lever, w.r
         t1 = np.array([cy, sy, 0 * cy])
         t2 = np.array([-sy * cg, cy * cg, s * sg + 0 * cy])
         n = np.array([s * sy * sg, -s * cy * sg, cg + 0 * cy])
         np.testing.assert_allclose([np.einsum("i...,i...", t1, n), np.einsum("i...,i...", t2, n),
                                     np.einsum("i...,i...", n, n) - 1], 0, atol=1e-15)
-        Fw = w["eps"] * (w["fx"] * t1 + w["fy"] * t2) + w["N"] * n
+        Fw = w.eps * (w.fx * t1 + w.fy * t2) + w.N * n
         p = np.array([-l * sy, l * cy, -r + 0 * cy])
-        Mw = np.cross(p, Fw, axis=0) + w["eps"] * w["mz"] * n
+        Mw = np.cross(p, Fw, axis=0) + w.eps * w.mz * n
         Ff, Mf = force_and_moment(NUMPY, w, st.yaw)
         np.testing.assert_allclose(np.array(Ff), Fw, rtol=1e-12, atol=1e-9)
         np.testing.assert_allclose(np.array(Mf), Mw, rtol=1e-12, atol=1e-9)
@@ -172,11 +172,11 @@ def test_normal_force_is_unilateral(s1002):
     geo = s1002.geometry(0.0)
     lifted = WheelsetState(0.0, geo["dz0"] + 1e-6, 0.0, 0.0, 0.0, -0.1, 0.0, 0.0, 20.0)
     for w in wheelset_forces(SCALAR, lifted, geo, 10.0, 0.0, P, s1002.reference_load_N):
-        assert w["N"] == 0.0 and w["fx"] == 0.0 and w["fy"] == 0.0
+        assert w.N == 0.0 and w.fx == 0.0 and w.fy == 0.0
     # pressed but separating fast: the damper does not pull
     sep = lifted._replace(z=geo["dz0"] - 1e-6, z_t=1.0)
     for w in wheelset_forces(SCALAR, sep, geo, 10.0, 0.0, P, s1002.reference_load_N):
-        assert w["N"] == 0.0
+        assert w.N == 0.0
 
 
 # ----------------------------------------------------------------------------- exudyn model
@@ -204,8 +204,8 @@ def test_static_state_carries_the_load(s1002):
     L, R = wheelset_forces(SCALAR, ws.initial_state, s1002.geometry(0.0), 10.0, 0.0, P,
                            s1002.reference_load_N)
     W = P.axle_load_N + P.mass_kg * P.gravity_m_per_s2
-    assert L["N"] == pytest.approx(R["N"], rel=1e-9)
-    assert (L["N"] + R["N"]) * math.cos(s1002.geometry(0.0)["gamma_L"]) == pytest.approx(
+    assert L.N == pytest.approx(R.N, rel=1e-9)
+    assert (L.N + R.N) * math.cos(s1002.geometry(0.0)["gamma_L"]) == pytest.approx(
         W, rel=1e-3)  # the rest is the vertical share of the conicity spin-creep forces
 
 

@@ -82,16 +82,21 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .compiled import PYTHON, Ops, jitable
 from .creep import POISSON_RATIO, SHEAR_MODULUS_PA, hertz_semi_axes, kalker_coefficients
 from .geometry import ContactTable
 
 __all__ = [
     "WheelsetParams",
     "WheelsetState",
+    "WheelGeometry",
+    "WheelContact",
+    "LawConstants",
     "ContactLawTable",
     "GEOMETRY_COLUMNS",
     "SCALAR",
     "NUMPY",
+    "contact",
     "wheel_contact",
     "force_and_moment",
     "wheelset_forces",
@@ -136,6 +141,12 @@ class WheelsetParams:
         """Vertical load per wheel at rest on level track."""
         return 0.5 * (self.axle_load_N + self.mass_kg * self.gravity_m_per_s2)
 
+    def law_constants(self, reference_load_N: float) -> "LawConstants":
+        """The constants :func:`contact` reads, with the table's reference load."""
+        return LawConstants(float(self.hertz_constant_N_per_m1_5),
+                            float(self.contact_damping_N_s_per_m),
+                            float(self.friction_coefficient), 1.0 / float(reference_load_N))
+
 
 class WheelsetState(NamedTuple):
     """Wheelset coordinates in the track frame and their rates (see the module docstring)."""
@@ -152,51 +163,71 @@ class WheelsetState(NamedTuple):
 
 
 # ----------------------------------------------------------------------------- ops
-class _ScalarOps:
-    """Plain floats (``math``); ``where`` picks like exudyn's IfThenElse."""
-
-    sqrt = staticmethod(math.sqrt)
-    sin = staticmethod(math.sin)
-    cos = staticmethod(math.cos)
-    atan2 = staticmethod(math.atan2)
-    pow = staticmethod(math.pow)
-
-    @staticmethod
-    def where(cond, a, b):
-        return a if cond else b
-
-    @staticmethod
-    def max(a, b):
-        return a if a >= b else b
-
-    @staticmethod
-    def min(a, b):
-        return a if a <= b else b
-
-    @staticmethod
-    def const(x):
-        return float(x)
+#: floats (Python's ``math``); ``where`` picks like exudyn's IfThenElse
+SCALAR = PYTHON
+#: arrays (element-wise); every branch is finite, so ``np.where`` warns about nothing
+NUMPY = Ops(np.sqrt, np.sin, np.cos, np.arctan2, np.power, np.where, np.maximum, np.minimum,
+            float)
 
 
-class _NumpyOps:
-    """Arrays (element-wise); every branch is finite, so ``np.where`` warns about nothing."""
+class WheelGeometry(NamedTuple):
+    """One wheel's contact geometry at the wheelset's lateral position (floats, arrays or
+    expressions; :meth:`ContactLawTable.wheel_geometry`): rolling radius ``r`` [m], contact
+    angle ``gamma`` [rad], lateral contact position ``yc`` [m], Kalker coefficients ``k11`` ..
+    ``k33`` at the table's reference load, the wheelset's rigid-contact ``roll0`` [rad] and
+    ``dz0`` [m], and their slopes in y ``droll0`` [rad/m], ``ddz0`` [-]."""
 
-    sqrt = staticmethod(np.sqrt)
-    sin = staticmethod(np.sin)
-    cos = staticmethod(np.cos)
-    atan2 = staticmethod(np.arctan2)
-    pow = staticmethod(np.power)
-    where = staticmethod(np.where)
-    max = staticmethod(np.maximum)
-    min = staticmethod(np.minimum)
+    r: object
+    gamma: object
+    yc: object
+    k11: object
+    k22: object
+    k23: object
+    k33: object
+    roll0: object
+    dz0: object
+    droll0: object
+    ddz0: object
 
-    @staticmethod
-    def const(x):
-        return float(x)
+    @classmethod
+    def of_side(cls, geo, side: str) -> "WheelGeometry":
+        """The ``side``'s ("L" or "R") wheel from a mapping of the :data:`GEOMETRY_COLUMNS`
+        and ``droll0``, ``ddz0`` (e.g. :meth:`ContactLawTable.geometry`)."""
+        return cls(*(geo[k] for k in _SIDE_KEYS[side][1]), geo["roll0"], geo["dz0"],
+                   geo["droll0"], geo["ddz0"])
 
 
-SCALAR = _ScalarOps()
-NUMPY = _NumpyOps()
+class LawConstants(NamedTuple):
+    """The constants of :func:`contact` (SI; :meth:`WheelsetParams.law_constants`)."""
+
+    hertz_constant: float  # N/m^1.5
+    damping: float  # normal contact damping, N s/m
+    friction_coefficient: float
+    inv_reference_load: float  # 1 / the table's reference load of the Kalker coefficients, 1/N
+
+
+class WheelContact(NamedTuple):
+    """One wheel's contact (:func:`contact`; floats, arrays or expressions): ``N`` normal force
+    [N], Kalker's linear creep forces ``fx``, ``fy`` [N] and spin moment ``mz`` [N m] (contact
+    frame), ``eps`` the Shen-Hedrick-Elkins factor (the forces are eps fx, eps fy, eps mz), the
+    creepages ``xi_x``, ``xi_y`` [-] and ``phi`` [1/m], ``delta`` the vertical overlap [m], and
+    the geometry the force acts through: ``r`` [m], ``lever`` = yc - y [m], ``cos_gamma``,
+    ``sin_gamma``, ``sign`` (+1 left, -1 right)."""
+
+    N: object
+    fx: object
+    fy: object
+    mz: object
+    eps: object
+    xi_x: object
+    xi_y: object
+    phi: object
+    delta: object
+    r: object
+    lever: object
+    cos_gamma: object
+    sin_gamma: object
+    sign: float
 
 
 # ----------------------------------------------------------------------------- geometry table
@@ -334,29 +365,19 @@ def _smoothed(y: np.ndarray, values: np.ndarray, sigma: float, dy: float):
 
 
 # ----------------------------------------------------------------------------- the law
-def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
-                  reference_load_N: float, V_ref=None) -> dict:
-    """Contact of one wheel (see the module docstring).
+@jitable
+def contact(ops, s, st, g, V, kappa, c, inv_V):
+    """Contact of one wheel (see the module docstring): a :class:`WheelContact`.
 
-    ``V_ref``: the speed the creepages are divided by (default ``V``). A model that may stand
-    still passes a regularised one, e.g. max(|V|, V_min): the numerators stay the true slip
-    velocities, so below V_min the creep forces become viscous (slip velocity times f / V_min)
-    instead of dividing by zero.
-
-    ``geo`` maps the :data:`GEOMETRY_COLUMNS` (and ``droll0``, ``ddz0``) to values or
-    expressions at the current y. Returns a dict of values or expressions: ``N`` (normal
-    force), ``fx``, ``fy``, ``mz`` (Kalker's linear creep forces and spin moment, contact frame),
-    ``eps`` (Shen-Hedrick-Elkins factor: the forces are eps fx, eps fy, eps mz), ``xi_x``,
-    ``xi_y``, ``phi`` (creepages), ``delta`` (vertical overlap, m) and the geometry the force
-    acts through (``r``, ``lever`` = yc - y, ``cos_gamma``, ``sin_gamma``, ``sign`` +1 left)."""
-    try:
-        s, (k_r, k_gam, k_yc, k11, k22, k23, k33) = _SIDE_KEYS[side]
-    except KeyError:
-        raise ValueError("side must be 'L' or 'R'") from None
+    ``s`` the side (+1.0 left, -1.0 right), ``st`` the :class:`WheelsetState`, ``g`` the
+    wheel's :class:`WheelGeometry` at st.y, ``V`` the speed [m/s], ``kappa`` the curvature
+    [1/m], ``c`` the :class:`LawConstants`, ``inv_V`` 1 / the speed the creepages are divided
+    by (see :func:`wheel_contact`). Compiled into the car's kernels
+    (:mod:`vehicle.wheelrail.compiled`)."""
     y, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin_t = st
     c0 = ops.const(0.0)
     c3 = ops.const(3.0)
-    r, gam, yc = geo[k_r], geo[k_gam], geo[k_yc]
+    r, gam, yc = g.r, g.gamma, g.yc
     lever = yc - y
     cg, sg = ops.cos(gam), ops.sin(gam)
     # --- normal force: Hertz along the normal, unilateral ---
@@ -364,18 +385,17 @@ def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetP
     # l d(roll) and sideways by r d(roll): along the normal (cos g, -s sin g) that is
     # cos(g) (l - s r tan g) d(roll), the moment arm of N about the axle (_arms: wn)
     arm = lever - s * r * sg / cg
-    delta = (geo["dz0"] - z) + arm * (geo["roll0"] - roll)
-    delta_t = (geo["ddz0"] + arm * geo["droll0"]) * y_t - z_t - arm * roll_t
+    delta = (g.dz0 - z) + arm * (g.roll0 - roll)
+    delta_t = (g.ddz0 + arm * g.droll0) * y_t - z_t - arm * roll_t
     dn = ops.max(delta, c0) * cg
-    N = ops.where(delta > 0.0, ops.max(p.hertz_constant_N_per_m1_5 * ops.pow(dn, 1.5)
-                                       + p.contact_damping_N_s_per_m * cg * delta_t, c0), c0)
+    N = ops.where(delta > 0.0, ops.max(c.hertz_constant * ops.pow(dn, 1.5)
+                                       + c.damping * cg * delta_t, c0), c0)
     # --- Kalker coefficients at this load: ellipse size ~ N^(1/3) ---
-    load = N * (1.0 / reference_load_N)
+    load = N * c.inv_reference_load
     ab = ops.pow(load, 2.0 / 3.0)  # a b / (a b)_ref
-    f11, f22 = geo[k11] * ab, geo[k22] * ab
-    f23, f33 = geo[k23] * load, geo[k33] * ops.pow(load, 4.0 / 3.0)
+    f11, f22 = g.k11 * ab, g.k22 * ab
+    f23, f33 = g.k23 * load, g.k33 * ops.pow(load, 4.0 / 3.0)
     # --- creepages ---
-    inv_V = 1.0 / (V if V_ref is None else V_ref)
     xi_x = (V * (1.0 - kappa * yc) - lever * yaw_t - spin_t * r) * inv_V
     xi_y = (y_t + r * roll_t - V * yaw) * inv_V / cg
     phi = ((yaw_t + kappa * V) * cg - s * spin_t * sg) * inv_V
@@ -384,18 +404,38 @@ def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetP
     fy = -f22 * xi_y - f23 * phi
     mz = f23 * xi_y - f33 * phi
     u = ops.sqrt(ops.pow(fx, 2.0) + ops.pow(fy, 2.0)) / ops.max(
-        p.friction_coefficient * N, ops.const(1e-9))
+        c.friction_coefficient * N, ops.const(1e-9))
     # eps = 1 - u/3 + u^2/27 = ((u - 4.5)^2 + 6.75)/27 for u <= 3 and 1/u beyond, written with
     # min/max: u is evaluated twice and no branch divides by zero
     um = ops.min(u, c3)
     eps = (ops.pow(um - 4.5, 2.0) * (1.0 / 27.0) + 0.25) * ops.min(
         ops.const(1.0), 3.0 / ops.max(u, c3))
-    return {"N": N, "fx": fx, "fy": fy, "mz": mz, "eps": eps, "xi_x": xi_x, "xi_y": xi_y,
-            "phi": phi, "delta": delta, "r": r, "lever": lever, "cos_gamma": cg,
-            "sin_gamma": sg, "sign": s}
+    return WheelContact(N, fx, fy, mz, eps, xi_x, xi_y, phi, delta, r, lever, cg, sg, s)
 
 
-def _arms(ops, w: dict, yaw):
+def wheel_contact(ops, side: str, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
+                  reference_load_N: float, V_ref=None) -> WheelContact:
+    """Contact of one wheel, :func:`contact` with the wheel's columns of ``geo``.
+
+    ``V_ref``: the speed the creepages are divided by (default ``V``). A model that may stand
+    still passes a regularised one, e.g. max(|V|, V_min): the numerators stay the true slip
+    velocities, so below V_min the creep forces become viscous (slip velocity times f / V_min)
+    instead of dividing by zero.
+
+    ``geo`` maps the :data:`GEOMETRY_COLUMNS` (and ``droll0``, ``ddz0``) to values or
+    expressions at the current y (:meth:`ContactLawTable.geometry`), or is the side's
+    :class:`WheelGeometry`."""
+    try:
+        s = _SIDE_KEYS[side][0]
+    except KeyError:
+        raise ValueError("side must be 'L' or 'R'") from None
+    g = geo if isinstance(geo, WheelGeometry) else WheelGeometry.of_side(geo, side)
+    return contact(ops, s, st, g, V, kappa, p.law_constants(reference_load_N),
+                   1.0 / (V if V_ref is None else V_ref))
+
+
+@jitable
+def _arms(ops, w, yaw):
     """Directions and moment arms of one wheel's contact forces in the track frame.
 
     Contact frame of the yawed wheel: t1 = (cos yaw, sin yaw, 0), t2 = (-sin yaw cos g,
@@ -404,7 +444,7 @@ def _arms(ops, w: dict, yaw):
     moments about the wheelset centre per unit force: p x t1 = (r sin yaw, -r cos yaw, -l),
     p x t2 = w2 (cos yaw, sin yaw, 0), p x n = wn (cos yaw, sin yaw, 0) with
     w2 = s l sin g + r cos g, wn = l cos g - s r sin g (the spin moment acts along n)."""
-    s, r, l, cg, sg = w["sign"], w["r"], w["lever"], w["cos_gamma"], w["sin_gamma"]
+    s, r, l, cg, sg = w.sign, w.r, w.lever, w.cos_gamma, w.sin_gamma
     cy, sy = ops.cos(yaw), ops.sin(yaw)
     t1 = (cy, sy, 0.0)
     t2 = (-sy * cg, cy * cg, s * sg)
@@ -414,12 +454,13 @@ def _arms(ops, w: dict, yaw):
     return (t1, t2, n), ((r * sy, -r * cy, -l), (cy * w2, sy * w2, 0.0), (cy * wn, sy * wn, 0.0))
 
 
-def force_and_moment(ops, w: dict, yaw) -> tuple[tuple, tuple]:
+@jitable
+def force_and_moment(ops, w, yaw):
     """Track-frame force of one wheel's contact on the wheelset and its moment about the
-    wheelset centre (N, N m), from a :func:`wheel_contact` dict."""
+    wheelset centre (N, N m), from a :class:`WheelContact`."""
     (t1, t2, n), (m1, m2, mn) = _arms(ops, w, yaw)
-    eps = w["eps"]
-    Fx, Fy, Mz, N = eps * w["fx"], eps * w["fy"], eps * w["mz"], w["N"]
+    eps = w.eps
+    Fx, Fy, Mz, N = eps * w.fx, eps * w.fy, eps * w.mz, w.N
     # written out per component (no generator: this runs 8 times per residual of the car);
     # the terms with a zero direction component (t1 and the moment arms have none along z,
     # see _arms) are left out
@@ -433,7 +474,7 @@ def force_and_moment(ops, w: dict, yaw) -> tuple[tuple, tuple]:
 
 
 def wheelset_forces(ops, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
-                    reference_load_N: float, V_ref=None) -> tuple[dict, dict]:
+                    reference_load_N: float, V_ref=None) -> tuple[WheelContact, WheelContact]:
     """Both wheels' :func:`wheel_contact` (left, right)."""
     return (wheel_contact(ops, "L", st, geo, V, kappa, p, reference_load_N, V_ref),
             wheel_contact(ops, "R", st, geo, V, kappa, p, reference_load_N, V_ref))
@@ -481,10 +522,10 @@ def generalized_forces(ops, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
         for k, c in enumerate(coef):
             if c is None:
                 continue
-            creep = c[0] * w["fx"] + c[1] * w["fy"]
+            creep = c[0] * w.fx + c[1] * w.fy
             if k >= 3:
-                creep = creep + c[2] * w["mz"]
-            Q[k] = Q[k] + w["eps"] * creep + c[3] * w["N"]
+                creep = creep + c[2] * w.mz
+            Q[k] = Q[k] + w.eps * creep + c[3] * w.N
     Is = p.spin_inertia_kg_m2
     Q[3] = Q[3] + Is * st.spin_t * (st.yaw_t + kappa * V)  # gyroscopic, about x
     Q[5] = Q[5] - Is * st.spin_t * st.roll_t  # gyroscopic, about z

@@ -47,14 +47,17 @@ divided by zero (see :class:`WheelsetTrackContact`).
 
 from __future__ import annotations
 
-import bisect
 import math
 from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from .contact_law import (GEOMETRY_COLUMNS, NUMPY, SCALAR, ContactLawTable, WheelsetParams,
-                          WheelsetState, force_and_moment, wheel_contact)
+from . import compiled, kernel_ops
+from . import contact_law as _contact_law
+from .compiled import jitable, kernel
+from .contact_law import (GEOMETRY_COLUMNS, SCALAR, ContactLawTable, LawConstants,
+                          WheelGeometry, WheelsetParams, WheelsetState, contact,
+                          force_and_moment)
 
 __all__ = ["WheelsetTrackContact", "WheelContactOutputs", "COORDINATES_PER_WHEELSET"]
 
@@ -62,8 +65,9 @@ __all__ = ["WheelsetTrackContact", "WheelContactOutputs", "COORDINATES_PER_WHEEL
 COORDINATES_PER_WHEELSET = 7
 
 _SIDES = ("L", "R")
-_SIDE_COLUMNS = {side: tuple(n for n in GEOMETRY_COLUMNS if n.endswith("_" + side)
-                             or n in ("roll0", "dz0")) for side in _SIDES}
+_contact_law_file = _contact_law.__file__
+_compiled_file = compiled.__file__
+_kernel_ops_file = kernel_ops.__file__
 
 
 class WheelContactOutputs(NamedTuple):
@@ -95,6 +99,10 @@ class _Frame(NamedTuple):
     rails: tuple  # ((e, e_t) left, (e, e_t) right): lateral rail offsets and rates
 
 
+#: length of a frame packed into a row of floats (:func:`_packed`, :func:`_unpacked`)
+_FRAME_ROW = 21
+
+
 def _frame(x, y, heading, cant, curvature, cant_rate, V, rails, b) -> _Frame:
     (eL, eLt, zL, zLt), (eR, eRt, zR, zRt) = rails
     cp, sp = math.cos(heading), math.sin(heading)
@@ -108,6 +116,191 @@ def _frame(x, y, heading, cant, curvature, cant_rate, V, rails, b) -> _Frame:
     w = (g_t, curvature * V * sg, curvature * V * cg)
     return _Frame(float(x), float(y), 0.5 * (zL + zR), 0.5 * (zLt + zRt), t, l, n, w,
                   float(curvature), ((float(eL), float(eLt)), (float(eR), float(eRt))))
+
+
+def _packed(fr: _Frame) -> list:
+    """A frame as :data:`_FRAME_ROW` floats (the kernels' input)."""
+    (eL, eLt), (eR, eRt) = fr.rails
+    return [fr.ox, fr.oy, fr.oz, fr.oz_t, *fr.t, *fr.l, *fr.n, *fr.w, fr.kappa, eL, eLt, eR,
+            eRt]
+
+
+@jitable
+def _unpacked(row) -> _Frame:
+    """The frame of a :func:`_packed` row."""
+    return _Frame(row[0], row[1], row[2], row[3], (row[4], row[5], row[6]),
+                  (row[7], row[8], row[9]), (row[10], row[11], row[12]),
+                  (row[13], row[14], row[15]), row[16], ((row[17], row[18]), (row[19], row[20])))
+
+
+class _Setup(NamedTuple):
+    """What the kernel needs besides the state and the frames (floats; see
+    :class:`WheelsetTrackContact`)."""
+
+    law: LawConstants
+    V: float  # running speed, m/s
+    inv_V: float  # 1 / max(V, V_min)
+    r0: float  # centre height of the centred rigid contact, m
+    spin_inertia: float  # kg m^2
+
+
+@jitable
+def _unpacked_setup(row) -> _Setup:
+    """The :class:`_Setup` of its values in a flat array (kernels take arrays: numba checks
+    their types at every call much faster than those of tuples)."""
+    return _Setup(LawConstants(row[0], row[1], row[2], row[3]), row[4], row[5], row[6], row[7])
+
+
+#: the columns of one wheel in the kernels' table (the order of WheelGeometry's first nine)
+_WHEEL_COLUMNS = ("r", "gamma", "yc", "k11", "k22", "k23", "k33")
+
+
+@jitable
+def _lookup(table, side, y) -> WheelGeometry:
+    """The wheel's (side 0 left, 1 right) geometry at y from the kernels' table
+    ``(y rows, values (2, 9, rows), slopes (2, 9, rows - 1))``: linear interpolation; beyond
+    the table its end rows hold (a derailing wheelset or a Newton iterate: the law stays finite
+    and the next PreStep stops the run, :meth:`WheelsetTrackContact.in_table`)."""
+    ys, values, slopes = table
+    y = min(max(y, ys[0]), ys[-1])
+    i = min(max(np.searchsorted(ys, y, side="right") - 1, 0), ys.size - 2)
+    d = y - ys[i]
+    v, s = values[side], slopes[side]
+    return WheelGeometry(v[0, i] + s[0, i] * d, v[1, i] + s[1, i] * d, v[2, i] + s[2, i] * d,
+                         v[3, i] + s[3, i] * d, v[4, i] + s[4, i] * d, v[5, i] + s[5, i] * d,
+                         v[6, i] + s[6, i] * d, v[7, i] + s[7, i] * d, v[8, i] + s[8, i] * d,
+                         s[7, i], s[8, i])
+
+
+@jitable
+def _wheel(ops, table, su, side, fr, ry, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin):
+    """One wheel (side 0 left, 1 right) of a wheelset at its pose in the track frame: its
+    :class:`WheelContact`, and the contact's force and moment about the wheelset centre in the
+    track frame."""
+    e, e_t = fr.rails[side]
+    ys = ry - e
+    st = WheelsetState(ys, z, roll, yaw, y_t - e_t, z_t, roll_t, yaw_t, spin)
+    wc = contact(ops, 1.0 - 2.0 * side, st, _lookup(table, side, ys), su.V, fr.kappa, su.law,
+                 su.inv_V)
+    F, M = force_and_moment(ops, wc, yaw)
+    return wc, F, M
+
+
+@jitable
+def _wheelset(ops, table, su, ref, fr, q, qt):
+    """One wheelset: (generalized forces (7) on its coordinates ``q``, ``qt`` (7 each), the
+    two wheels' (contact, track-frame force), and its pose (lateral y, yaw) in the track
+    frame)."""
+    a, b, c = q[3], q[4], q[5]
+    ca, sa, cb, sb, cc, sc = ops.cos(a), ops.sin(a), ops.cos(b), ops.sin(b), ops.cos(c), \
+        ops.sin(c)
+    # body axes, columns of A = Rx(a) Ry(b) Rz(c) (global); ay is the axle
+    axx, axy = cb * cc, ca * sc + sa * sb * cc
+    ayx, ayy, ayz = -cb * sc, ca * cc - sa * sb * sc, sa * cc + ca * sb * sc
+    azx, azy, azz = sb, -sa * cb, ca * cb
+    ad, bd, cd = qt[3], qt[4], qt[5]
+    wx, wy, wz = ad + sb * cd, ca * bd - sa * cb * cd, sa * bd + ca * cb * cd  # G theta'
+    tx, ty, _ = fr.t
+    lx, ly, lz = fr.l
+    nx, ny, nz = fr.n
+    W0, W1, W2 = fr.w
+    dx, dy, dz = ref[0] + q[0] - fr.ox, ref[1] + q[1] - fr.oy, ref[2] + q[2] - fr.oz
+    rx = tx * dx + ty * dy
+    ry = lx * dx + ly * dy + lz * dz
+    rz = nx * dx + ny * dy + nz * dz
+    vx, vy, vz = qt[0], qt[1], qt[2] - fr.oz_t
+    # rates relative to the moving, turning frame: R^T (v - V t - oz' e_z) - W x r
+    y_t = lx * vx + ly * vy + lz * vz - (W2 * rx - W0 * rz)
+    z_t = nx * vx + ny * vy + nz * vz - (W0 * ry - W1 * rx)
+    roll = ops.atan2(-(lx * azx + ly * azy + lz * azz), nx * azx + ny * azy + nz * azz)
+    yaw = ops.atan2(-(tx * ayx + ty * ayy), tx * axx + ty * axy)
+    roll_t = tx * wx + ty * wy - W0
+    yaw_t = nx * wx + ny * wy + nz * wz - W2
+    spin = qt[6]
+    z = rz - su.r0
+    wl, Fl, Ml = _wheel(ops, table, su, 0, fr, ry, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin)
+    wr, Fr, Mr = _wheel(ops, table, su, 1, fr, ry, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin)
+    F0, F1, F2 = Fl[0] + Fr[0], Fl[1] + Fr[1], Fl[2] + Fr[2]
+    M0, M1, M2 = Ml[0] + Mr[0], Ml[1] + Mr[1], Ml[2] + Mr[2]
+    # to global axes (track frame columns t, l, n)
+    Fgx, Fgy, Fgz = F0 * tx + F1 * lx + F2 * nx, F0 * ty + F1 * ly + F2 * ny, F1 * lz + F2 * nz
+    Mgx, Mgy, Mgz = M0 * tx + M1 * lx + M2 * nx, M0 * ty + M1 * ly + M2 * ny, M1 * lz + M2 * nz
+    m_spin = Mgx * ayx + Mgy * ayy + Mgz * ayz
+    gyro = su.spin_inertia * spin  # I_s Omega (a x omega)
+    Mbx = Mgx - m_spin * ayx + gyro * (ayy * wz - ayz * wy)
+    Mby = Mgy - m_spin * ayy + gyro * (ayz * wx - ayx * wz)
+    Mbz = Mgz - m_spin * ayz + gyro * (ayx * wy - ayy * wx)
+    Q = (Fgx, Fgy, Fgz, Mbx, ca * Mby + sa * Mbz, sb * Mbx - sa * cb * Mby + ca * cb * Mbz,
+         m_spin)
+    return Q, ((wl, Fl), (wr, Fr)), (ry, yaw)
+
+
+_DEPENDS = (__file__, _contact_law_file, _compiled_file, _kernel_ops_file)
+
+
+@kernel(*_DEPENDS)
+def _forces_kernel(q, qt, refs, frames, ys, values, slopes, setup):
+    """Generalized contact forces of all wheelsets, (7n,)."""
+    ops, table, su = kernel_ops, (ys, values, slopes), _unpacked_setup(setup)
+    out = np.empty(q.size)
+    for i in range(refs.shape[0]):
+        k = 7 * i
+        Q = _wheelset(ops, table, su, refs[i], _unpacked(frames[i]), q[k:k + 7], qt[k:k + 7])[0]
+        for j in range(7):
+            out[k + j] = Q[j]
+    return out
+
+
+@kernel(*_DEPENDS)
+def _jacobian_kernel(q, qt, refs, frames, ys, values, slopes, setup, factor_q, factor_q_t, h_q,
+                     h_qt):
+    """factor_q d(-Q)/dq + factor_q_t d(-Q)/dq_t by forward differences, block diagonal."""
+    ops, table, su = kernel_ops, (ys, values, slopes), _unpacked_setup(setup)
+    n = refs.shape[0]
+    J = np.zeros((7 * n, 7 * n))
+    for i in range(n):
+        k = 7 * i
+        fr = _unpacked(frames[i])
+        qi, vi = q[k:k + 7].copy(), qt[k:k + 7].copy()
+        base = _wheelset(ops, table, su, refs[i], fr, qi, vi)[0]
+        for col in range(13):  # 6 positions (the spin angle does not enter), 7 rates
+            qp, vp = qi.copy(), vi.copy()
+            if col < 6:
+                qp[col] += h_q
+                scale = factor_q / h_q
+                j = col
+            else:
+                vp[col - 6] += h_qt
+                scale = factor_q_t / h_qt
+                j = col - 6
+            Qp = _wheelset(ops, table, su, refs[i], fr, qp, vp)[0]
+            for r in range(7):
+                J[k + r, k + j] -= scale * (Qp[r] - base[r])
+    return J
+
+
+@kernel(*_DEPENDS)
+def _outputs_kernel(q, qt, refs, frames, ys, values, slopes, setup):
+    """Per wheel (2n): N, the track-frame force (3), the contact angle, eps, the creepages (3);
+    per wheelset (n): lateral y and yaw in the track frame."""
+    ops, table, su = kernel_ops, (ys, values, slopes), _unpacked_setup(setup)
+    n = refs.shape[0]
+    wheels = np.empty((2 * n, 9))
+    pose = np.empty((n, 2))
+    for i in range(n):
+        k = 7 * i
+        _, ws, (ry, yaw) = _wheelset(ops, table, su, refs[i], _unpacked(frames[i]),
+                                     q[k:k + 7], qt[k:k + 7])
+        pose[i, 0], pose[i, 1] = ry, yaw
+        for side in range(2):
+            wc, F = ws[side]
+            row = wheels[2 * i + side]
+            row[0] = wc.N
+            row[1], row[2], row[3] = F[0], F[1], F[2]
+            row[4] = math.atan2(wc.sin_gamma, wc.cos_gamma)
+            row[5] = wc.eps
+            row[6], row[7], row[8] = wc.xi_x, wc.xi_y, wc.phi
+    return wheels, pose
 
 
 class WheelsetTrackContact:
@@ -148,22 +341,15 @@ class WheelsetTrackContact:
         self.V_ref = max(self.V, float(min_creep_speed_m_per_s))
         self.flange_angle_rad = float(flange_angle_rad)
         self.b = law_table.table.contact_half_spacing
-        # table rows for the scalar lookup: per side, (values, slopes) of that side's columns
-        self._y = law_table.y
-        self._y_list = law_table.y.tolist()
-        self._last = law_table.y.size - 2
-        idx = {n: j for j, n in enumerate(GEOMETRY_COLUMNS)}
-        self._rows = {}
-        self._cols = {}
-        for side in _SIDES:
-            names = _SIDE_COLUMNS[side]
-            js = [idx[n] for n in names]
-            vals = law_table.values[js, :-1].T.tolist()
-            slos = law_table.slopes[js, :].T.tolist()
-            self._rows[side] = [(names, v, s, s[names.index("roll0")], s[names.index("dz0")])
-                                for v, s in zip(vals, slos)]
-            # the side's columns as contiguous (columns, rows) blocks: one gather per lookup
-            self._cols[side] = (names, law_table.values[js], law_table.slopes[js])
+        # the kernels' table: per side the columns of WheelGeometry (r .. k33, roll0, dz0)
+        idx = [[GEOMETRY_COLUMNS.index(n) for n in
+                [f"{c}_{side}" for c in _WHEEL_COLUMNS] + ["roll0", "dz0"]] for side in _SIDES]
+        self._table = (np.ascontiguousarray(law_table.y),
+                       np.ascontiguousarray(law_table.values[idx]),
+                       np.ascontiguousarray(law_table.slopes[idx]))
+        self._setup = _Setup(params.law_constants(self.N_ref), self.V, 1.0 / self.V_ref,
+                             self.r0, float(params.spin_inertia_kg_m2))
+        self._setup_row = np.array([*self._setup.law, *self._setup[1:]])
         self.set_track([(r[0], 0.0, 0.0, 0.0, 0.0, 0.0) for r in self._ref])
 
     # ------------------------------------------------------------------ per step
@@ -178,6 +364,7 @@ class WheelsetTrackContact:
         V, b = self.V, self.b
         self._frames = [_frame(*f, V, (tuple(r[0]), tuple(r[1])), b)
                         for f, r in zip(frames, rails)]
+        self._frame_rows = np.array([_packed(f) for f in self._frames])
 
     def lateral_positions_at_step_end(self, q, q_t, h: float) -> list[float]:
         """Lateral positions of the wheelsets predicted h later, y + h y' (``q``, ``q_t``: the
@@ -186,107 +373,16 @@ class WheelsetTrackContact:
         qt = q_t.tolist() if hasattr(q_t, "tolist") else list(q_t)
         return self.lateral_positions([a + h * b for a, b in zip(qq, qt)])
 
-    # ------------------------------------------------------------------ lookups
-    def _geo_scalar(self, side: str, y: float) -> dict:
-        """The side's table columns at y (linear interpolation between the rows)."""
-        yl = self._y_list
-        # beyond the table (a derailing wheelset, or a Newton iterate) its end rows hold: the
-        # law stays finite and the next PreStep stops the run (WheelsetTrackContact.in_table)
-        y = yl[0] if y < yl[0] else (yl[-1] if y > yl[-1] else y)
-        i = bisect.bisect_right(yl, y) - 1
-        i = 0 if i < 0 else (self._last if i > self._last else i)
-        names, v, s, droll0, ddz0 = self._rows[side][i]
-        dy = y - self._y_list[i]
-        geo = {n: vi + si * dy for n, vi, si in zip(names, v, s)}
-        geo["droll0"] = droll0
-        geo["ddz0"] = ddz0
-        return geo
-
-    def _geo_numpy(self, side: str, y: np.ndarray) -> dict:
-        y = np.clip(y, self._y[0], self._y[-1])  # end rows hold beyond the table
-        i = np.clip(np.searchsorted(self._y, y, side="right") - 1, 0, self._last)
-        dy = y - self._y[i]
-        names, vals, slos = self._cols[side]
-        s = slos[:, i]
-        geo = dict(zip(names, vals[:, i] + s * dy))
-        geo["droll0"] = s[names.index("roll0")]
-        geo["ddz0"] = s[names.index("dz0")]
-        return geo
-
-    # ------------------------------------------------------------------ the kernel
-    def _wheelset(self, ops, lookup, ref, fr, q, qt):
-        """One wheelset: (generalized forces (7) on its coordinates ``q``, ``qt`` (sequences of
-        7 floats, or of arrays for ``ops`` = NUMPY), the per-wheel (contact dict, track-frame
-        force) pairs, and its pose (lateral y, yaw) in the track frame)."""
-        p = self.params
-        a, b, c = q[3], q[4], q[5]
-        ca, sa, cb, sb, cc, sc = ops.cos(a), ops.sin(a), ops.cos(b), ops.sin(b), ops.cos(c), \
-            ops.sin(c)
-        # body axes, columns of A = Rx(a) Ry(b) Rz(c) (global); ay is the axle
-        axx, axy = cb * cc, ca * sc + sa * sb * cc
-        ayx, ayy, ayz = -cb * sc, ca * cc - sa * sb * sc, sa * cc + ca * sb * sc
-        azx, azy, azz = sb, -sa * cb, ca * cb
-        ad, bd, cd = qt[3], qt[4], qt[5]
-        wx, wy, wz = ad + sb * cd, ca * bd - sa * cb * cd, sa * bd + ca * cb * cd  # G theta'
-        tx, ty, _ = fr.t
-        lx, ly, lz = fr.l
-        nx, ny, nz = fr.n
-        W0, W1, W2 = fr.w
-        dx, dy, dz = ref[0] + q[0] - fr.ox, ref[1] + q[1] - fr.oy, ref[2] + q[2] - fr.oz
-        rx = tx * dx + ty * dy
-        ry = lx * dx + ly * dy + lz * dz
-        rz = nx * dx + ny * dy + nz * dz
-        vx, vy, vz = qt[0], qt[1], qt[2] - fr.oz_t
-        # rates relative to the moving, turning frame: R^T (v - V t - oz' e_z) - W x r
-        y_t = lx * vx + ly * vy + lz * vz - (W2 * rx - W0 * rz)
-        z_t = nx * vx + ny * vy + nz * vz - (W0 * ry - W1 * rx)
-        roll = ops.atan2(-(lx * azx + ly * azy + lz * azz), nx * azx + ny * azy + nz * azz)
-        yaw = ops.atan2(-(tx * ayx + ty * ayy), tx * axx + ty * axy)
-        roll_t = tx * wx + ty * wy - W0
-        yaw_t = nx * wx + ny * wy + nz * wz - W2
-        spin = qt[6]
-        z = rz - self.r0
-        F0 = F1 = F2 = M0 = M1 = M2 = 0.0
-        wheels = []
-        for side, (e, e_t) in zip(_SIDES, fr.rails):
-            ys = ry - e
-            st = WheelsetState(ys, z, roll, yaw, y_t - e_t, z_t, roll_t, yaw_t, spin)
-            wc = wheel_contact(ops, side, st, lookup(side, ys), self.V, fr.kappa, p,
-                               self.N_ref, self.V_ref)
-            Fs, Ms = force_and_moment(ops, wc, yaw)
-            F0, F1, F2 = F0 + Fs[0], F1 + Fs[1], F2 + Fs[2]
-            M0, M1, M2 = M0 + Ms[0], M1 + Ms[1], M2 + Ms[2]
-            wheels.append((wc, Fs))
-        # to global axes (track frame columns t, l, n)
-        Fgx, Fgy, Fgz = F0 * tx + F1 * lx + F2 * nx, F0 * ty + F1 * ly + F2 * ny, F1 * lz + F2 * nz
-        Mgx, Mgy, Mgz = M0 * tx + M1 * lx + M2 * nx, M0 * ty + M1 * ly + M2 * ny, M1 * lz + M2 * nz
-        m_spin = Mgx * ayx + Mgy * ayy + Mgz * ayz
-        gyro = p.spin_inertia_kg_m2 * spin  # I_s Omega (a x omega)
-        Mbx = Mgx - m_spin * ayx + gyro * (ayy * wz - ayz * wy)
-        Mby = Mgy - m_spin * ayy + gyro * (ayz * wx - ayx * wz)
-        Mbz = Mgz - m_spin * ayz + gyro * (ayx * wy - ayy * wx)
-        Q = [Fgx, Fgy, Fgz, Mbx, ca * Mby + sa * Mbz, sb * Mbx - sa * cb * Mby + ca * cb * Mbz,
-             m_spin]
-        return Q, wheels, (ry, yaw)
-
     # ------------------------------------------------------------------ interface
-    def forces(self, q, q_t) -> list:
+    def _args(self, q, q_t) -> tuple:
+        return (np.asarray(q, dtype=float), np.asarray(q_t, dtype=float), self._ref_arr,
+                self._frame_rows, *self._table, self._setup_row)
+
+    def forces(self, q, q_t) -> np.ndarray:
         """Generalized contact forces on all wheelsets' coordinates (7 per wheelset, in the
-        order of the module docstring), floats. The evaluation is kept: :meth:`outputs` at
-        the same coordinates reuses it (the last residual of a converged step is the state)."""
-        q = q.tolist() if hasattr(q, "tolist") else list(q)
-        q_t = q_t.tolist() if hasattr(q_t, "tolist") else list(q_t)
-        out = []
-        kept = []
-        look = self._geo_scalar
-        wheelset = self._wheelset
-        for i, (ref, fr) in enumerate(zip(self._ref, self._frames)):
-            k = 7 * i
-            Q, wheels, pose = wheelset(SCALAR, look, ref, fr, q[k:k + 7], q_t[k:k + 7])
-            out += Q
-            kept.append((wheels, pose))
-        self._kept = (q, q_t, self._frames, kept)
-        return out
+        order of the module docstring), (7n,): the compiled kernel
+        (:mod:`vehicle.wheelrail.compiled`)."""
+        return _forces_kernel(*self._args(q, q_t))
 
     #: finite-difference steps of :meth:`jacobian` for positions [m, rad] and rates [m/s, rad/s]
     FD_STEP_POSITION = 1e-8
@@ -295,70 +391,16 @@ class WheelsetTrackContact:
     def jacobian(self, q, q_t, factor_q: float, factor_q_t: float) -> np.ndarray:
         """factor_q d(-Q)/dq + factor_q_t d(-Q)/dq_t (the derivative of the left-hand side,
         where the contact forces enter with a minus sign), (7n, 7n), block diagonal: forward
-        differences of the same law, all wheelsets and perturbations in one vectorised
-        evaluation."""
-        nw, m = self.n, 14  # base, 6 positions (the spin angle does not enter), 7 rates
-        qa = np.asarray(q, dtype=float).reshape(nw, 7).T
-        va = np.asarray(q_t, dtype=float).reshape(nw, 7).T
-        Qin = np.repeat(qa[:, :, None], m, axis=2)
-        Vin = np.repeat(va[:, :, None], m, axis=2)
-        hq, hv = self.FD_STEP_POSITION, self.FD_STEP_RATE
-        for k in range(6):
-            Qin[k, :, 1 + k] += hq
-        for k in range(7):
-            Vin[k, :, 7 + k] += hv
-        Qin = Qin.reshape(7, nw * m)
-        Vin = Vin.reshape(7, nw * m)
-        ref = self._ref_arr.repeat(m, axis=0).T
-        frs = self._frames
-        rep = lambda vals: np.repeat(np.asarray(vals, dtype=float), m)  # noqa: E731
-        fr = _Frame(rep([f.ox for f in frs]), rep([f.oy for f in frs]),
-                    rep([f.oz for f in frs]), rep([f.oz_t for f in frs]),
-                    tuple(rep([f.t[k] for f in frs]) for k in range(3)),
-                    tuple(rep([f.l[k] for f in frs]) for k in range(3)),
-                    tuple(rep([f.n[k] for f in frs]) for k in range(3)),
-                    tuple(rep([f.w[k] for f in frs]) for k in range(3)),
-                    rep([f.kappa for f in frs]),
-                    tuple(tuple(rep([f.rails[s][k] for f in frs]) for k in range(2))
-                          for s in range(2)))
-        Q = self._wheelset(NUMPY, self._geo_numpy, ref, fr, Qin, Vin)[0]
-        Q = np.array([np.broadcast_to(v, (nw * m,)) for v in Q]).reshape(7, nw, m)
-        J = np.zeros((7 * nw, 7 * nw))
-        for i in range(nw):
-            base = Q[:, i, 0:1]
-            dq = (Q[:, i, 1:7] - base) / hq
-            dv = (Q[:, i, 7:14] - base) / hv
-            blk = J[7 * i:7 * i + 7, 7 * i:7 * i + 7]
-            blk[:, :6] -= factor_q * dq
-            blk -= factor_q_t * dv
-        return J
+        differences of the same law (compiled kernel)."""
+        return _jacobian_kernel(*self._args(q, q_t), float(factor_q), float(factor_q_t),
+                                self.FD_STEP_POSITION, self.FD_STEP_RATE)
 
     def outputs(self, q, q_t) -> WheelContactOutputs:
-        """The contact state of every wheel and wheelset at the given coordinates (the last
-        :meth:`forces` evaluation if it was at these coordinates and track, else evaluated)."""
-        q = q.tolist() if hasattr(q, "tolist") else list(q)
-        q_t = q_t.tolist() if hasattr(q_t, "tolist") else list(q_t)
-        kept = getattr(self, "_kept", None)
-        if kept is not None and kept[2] is self._frames and kept[0] == q and kept[1] == q_t:
-            per_wheelset = kept[3]
-        else:
-            look = self._geo_scalar
-            per_wheelset = [self._wheelset(SCALAR, look, ref, fr, q[7 * i:7 * i + 7],
-                                           q_t[7 * i:7 * i + 7])[1:]
-                            for i, (ref, fr) in enumerate(zip(self._ref, self._frames))]
-        N, F, gam, eps, xi, y, yaw, y_rails = [], [], [], [], [], [], [], []
-        for (wheels, (ry, ps)), fr in zip(per_wheelset, self._frames):
-            for wc, Fs in wheels:
-                N.append(wc["N"])
-                F.append(Fs)
-                gam.append(math.atan2(wc["sin_gamma"], wc["cos_gamma"]))
-                eps.append(wc["eps"])
-                xi.append((wc["xi_x"], wc["xi_y"], wc["phi"]))
-            y.append(ry)
-            yaw.append(ps)
-            y_rails.append(ry - 0.5 * (fr.rails[0][0] + fr.rails[1][0]))
-        return WheelContactOutputs(np.array(N), np.array(F), np.array(gam), np.array(eps),
-                                   np.array(xi), np.array(y), np.array(yaw), np.array(y_rails))
+        """The contact state of every wheel and wheelset at the given coordinates."""
+        wheels, pose = _outputs_kernel(*self._args(q, q_t))
+        e_mean = np.array([0.5 * (fr.rails[0][0] + fr.rails[1][0]) for fr in self._frames])
+        return WheelContactOutputs(wheels[:, 0], wheels[:, 1:4], wheels[:, 4], wheels[:, 5],
+                                   wheels[:, 6:9], pose[:, 0], pose[:, 1], pose[:, 0] - e_mean)
 
     def in_table(self, lateral_m: Sequence[float]) -> bool:
         """Whether every wheel's lateral position relative to its rail (wheelset lateral
@@ -382,20 +424,19 @@ class WheelsetTrackContact:
         the Hertz approach) at which a centred wheelset at rest (rolling freely at the running
         speed, no roll, no yaw) carries ``wheel_load_N`` per wheel: the sum of both contacts'
         forces normal to the track plane equals 2 wheel_load_N."""
-        p = self.params
-        look = self._geo_scalar
-        r0 = look("L", 0.0)["r_L"]
-        spin = self.V / r0
+        su = self._setup
+        geo = [_lookup(self._table, side, 0.0) for side in range(2)]
+        spin = self.V / float(geo[0].r)
 
         def vertical(z):
             total = 0.0
-            for side in _SIDES:
+            for side in range(2):
                 st = WheelsetState(0.0, z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, spin)
-                wc = wheel_contact(SCALAR, side, st, look(side, 0.0), self.V, 0.0, p,
-                                   self.N_ref, self.V_ref)
+                wc = contact(SCALAR, 1.0 - 2.0 * side, st, geo[side], su.V, 0.0, su.law,
+                             su.inv_V)
                 total += force_and_moment(SCALAR, wc, 0.0)[0][2]
             return total - 2.0 * wheel_load_N
 
         from scipy.optimize import brentq
-        d0 = (wheel_load_N / p.hertz_constant_N_per_m1_5) ** (2.0 / 3.0)
+        d0 = (wheel_load_N / self.params.hertz_constant_N_per_m1_5) ** (2.0 / 3.0)
         return float(brentq(vertical, -3.0 * d0, 0.0, xtol=1e-16, rtol=1e-15))

@@ -55,8 +55,8 @@ import numpy as np
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 from scipy.optimize import fsolve
 
-from .contact_law import (GEOMETRY_COLUMNS, NUMPY, SCALAR, ContactLawTable, WheelsetParams,
-                          WheelsetState, generalized_forces, wheelset_forces)
+from .contact_law import (GEOMETRY_COLUMNS, NUMPY, SCALAR, ContactLawTable, WheelContact,
+                          WheelsetParams, WheelsetState, generalized_forces, wheelset_forces)
 from .geometry import ContactTable
 
 __all__ = ["FreeWheelset", "WheelsetRun", "symbolic_ops"]
@@ -364,9 +364,9 @@ class FreeWheelset:
                            spin_t=w[:, 1], kappa=kap, speed_m_per_s=self.V, wall_s=wall,
                            steps=ti.numberOfSteps)
 
-    def contact_forces(self, run: WheelsetRun) -> tuple[dict, dict]:
-        """The force law (left, right wheel dicts of arrays, see ``contact_law.wheel_contact``)
-        evaluated along a run, with the full table interpolation."""
+    def contact_forces(self, run: WheelsetRun) -> tuple[WheelContact, WheelContact]:
+        """The force law (left, right :class:`~vehicle.wheelrail.contact_law.WheelContact` of
+        arrays) evaluated along a run, with the full table interpolation."""
         geo = self.law_table.geometry(run.y)
         return wheelset_forces(NUMPY, run.state(), geo, self.V, run.kappa, self.params,
                                self.N_ref)
