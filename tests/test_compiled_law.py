@@ -4,7 +4,10 @@ Python.
 The kernels compile the law's own functions (one source), so they must agree with the Python
 evaluation to rounding. The Python side is evaluated independently of the kernels: per wheelset
 with ``SCALAR`` ops (Python's math), and the Jacobian by central differences instead of the
-kernel's forward differences.
+kernel's forward differences. Since that shares the car's assembly (``_wheelset``, its table
+packing and lookup) with the kernels, the forces are also checked against the law assembled the
+free wheelset's way (``contact_law.generalized_forces`` on ``ContactLawTable.geometry``), which
+shares neither.
 """
 
 from __future__ import annotations
@@ -18,7 +21,8 @@ import numpy as np
 import pytest
 
 from vehicle.wheelrail import compiled
-from vehicle.wheelrail.contact_law import SCALAR, ContactLawTable, WheelsetParams
+from vehicle.wheelrail.contact_law import (SCALAR, ContactLawTable, WheelsetParams,
+                                           WheelsetState, generalized_forces)
 from vehicle.wheelrail.geometry import ContactTable
 from vehicle.wheelrail.track_contact import WheelsetTrackContact, _wheelset
 
@@ -26,18 +30,31 @@ R0 = 0.46
 V = 10.0
 
 
+REFS = np.array([[x, 0.0, R0] for x in (0.0, 1.9, 10.0, 11.9)])
+
+
 @pytest.fixture(scope="module")
-def contact():
-    p = WheelsetParams()
-    law = ContactLawTable(ContactTable.default(), p)
-    ref = np.array([[x, 0.0, R0] for x in (0.0, 1.9, 10.0, 11.9)])
-    return WheelsetTrackContact(law, p, ref, R0, V)
+def law():
+    return ContactLawTable(ContactTable.default(), WheelsetParams())
 
 
-def states(wr, rng, count):
-    """``count`` random (frames, rails, q, q_t) around rolling on a curve: every wheelset at a
-    lateral position across the whole table (tread, flange root, flank), in contact (pressed
-    20-60 um into the rails), yawed, rolled, with rates, on a canted curve with rail offsets."""
+@pytest.fixture(scope="module")
+def contact(law):
+    return WheelsetTrackContact(law, WheelsetParams(), REFS, R0, V)
+
+
+@pytest.fixture(scope="module")
+def creeping(law):
+    """Below the creep regularisation speed (0.3 < V_min = 1 m/s): viscous creep forces."""
+    return WheelsetTrackContact(law, WheelsetParams(), REFS, R0, 0.3)
+
+
+def states(wr, rng, count, edges=True):
+    """``count`` random (q, q_t) around rolling on a curve (set as the track of ``wr``): every
+    wheelset at a lateral position across the whole table (tread, flange root, flank), in
+    contact (pressed 20-60 um into the rails), yawed, rolled, with rates, on a canted curve with
+    rail offsets. With ``edges``, every third state has one wheelset beyond the table (its end
+    rows hold) and one lifted 1 mm off the rails (no contact)."""
     z0 = wr.static_rise_m(30e3)
     lo, hi = wr.table.y_range_m
     for _ in range(count):
@@ -61,7 +78,11 @@ def states(wr, rng, count):
             qt[7 * i:7 * i + 6] = [V * fr.t[0], V * fr.t[1], 0.0, 0.0, 0.0, 0.0]
             qt[7 * i:7 * i + 6] += np.r_[1e-2 * rng.standard_normal(3),
                                          1e-2 * rng.standard_normal(3)]
-            qt[7 * i + 6] = V / R0 * (1.0 + 1e-3 * rng.standard_normal())
+            qt[7 * i + 6] = wr.V / R0 * (1.0 + 1e-3 * rng.standard_normal())
+        if edges and rng.random() < 1 / 3:
+            i, j = rng.choice(4, size=2, replace=False)
+            q[7 * i:7 * i + 3] += 1.3 * hi * np.array(wr._frames[i].l)
+            q[7 * j:7 * j + 3] += 1e-3 * np.array(wr._frames[j].n)
         yield q, qt
 
 
@@ -80,21 +101,66 @@ def test_kernels_compile_here():
     assert compiled.numba_available()
 
 
-def test_compiled_forces_are_the_python_law(contact):
+@pytest.mark.parametrize("which", ["contact", "creeping"])
+def test_compiled_forces_are_the_python_law(which, request):
     """Same operations in the same order: equal to rounding. Tolerance: 1e-12 of each
-    wheelset's largest generalized force (the normal forces, ~30 kN); compiled and Python
-    transcendental functions may differ in the last bit, which the law amplifies by no more
-    than a few hundred (the Hertz power 1.5 of a 20-60 um overlap)."""
+    wheelset's largest generalized force (the normal forces, ~30 kN; a lifted wheelset's are
+    0, hence the floor of 1 N); compiled and Python transcendental functions may differ in the
+    last bit, which the law amplifies by no more than a few hundred (the Hertz power 1.5 of a
+    20-60 um overlap)."""
+    wr = request.getfixturevalue(which)
     rng = np.random.default_rng(11)
-    n_flange = 0
-    for q, qt in states(contact, rng, 60):
-        got = contact.forces(q, qt)
-        ref = python_forces(contact, q, qt)
+    n_flange = n_lifted = 0
+    for q, qt in states(wr, rng, 60):
+        got = wr.forces(q, qt)
+        ref = python_forces(wr, q, qt)
         assert np.all(np.isfinite(got))
-        scale = np.abs(ref.reshape(4, 7)).max(axis=1).repeat(7)
+        scale = np.maximum(np.abs(ref.reshape(4, 7)).max(axis=1), 1.0).repeat(7)
         np.testing.assert_array_less(np.abs(got - ref), 1e-12 * scale)
-        n_flange += int(np.sum(contact.outputs(q, qt).gamma_rad > 0.7))
-    assert n_flange > 20  # the states include flange contact
+        N = wr.outputs(q, qt).normal_N
+        n_flange += int(np.sum(wr.outputs(q, qt).gamma_rad > 0.7))
+        n_lifted += int(np.sum((N[0::2] == 0) & (N[1::2] == 0)))
+    assert n_flange > 20 and n_lifted > 5  # the states include flange contact and lifted ones
+
+
+def test_compiled_forces_are_the_free_wheelset_law(contact, law):
+    """On straight, level track the car's wheelset coordinates are the free wheelset's: roll
+    and yaw are the Rxyz angles a and c (pitch b = 0), the roll rate a', the yaw rate
+    cos(a) c'. So the kernel's generalized forces must equal ``generalized_forces`` of the law
+    (the coefficient form, with the table read by ``ContactLawTable.geometry``: neither the
+    kernels' assembly nor their table packing) with its gyroscopic terms taken out (the two
+    models write those differently; the kernel's spin inertia is set to 0 here). Tolerance
+    1e-9 of the wheelset's largest force: two assemblies of the same sums (rounding)."""
+    P = WheelsetParams()
+    wr = WheelsetTrackContact(law, P, REFS, R0, V)
+    wr._setup_row[7] = 0.0  # spin inertia: no gyroscopic moments
+    wr.set_track([(x, 0.0, 0.0, 0.0, 0.0, 0.0) for x in REFS[:, 0]])
+    z0 = wr.static_rise_m(30e3)
+    lo, hi = law.y_range_m
+    rng = np.random.default_rng(21)
+    for _ in range(40):
+        q, qt = np.zeros(28), np.zeros(28)
+        for i in range(4):
+            a, c = 1e-3 * rng.standard_normal(), 5e-3 * rng.standard_normal()
+            q[7 * i:7 * i + 6] = [0.0, rng.uniform(0.8 * lo, 0.8 * hi),
+                                  z0 - rng.uniform(2e-5, 6e-5), a, 0.0, c]
+            qt[7 * i:7 * i + 7] = [V, *(1e-2 * rng.standard_normal(2)), *(1e-2 * rng.standard_normal(2)),
+                                   0.0, V / R0 * (1.0 + 1e-3 * rng.standard_normal())]
+            qt[7 * i + 4] = 0.0
+            qt[7 * i + 5] = 1e-2 * rng.standard_normal()
+        got = wr.forces(q, qt).reshape(4, 7)
+        for i in range(4):
+            y, z, a, c = q[7 * i + 1], q[7 * i + 2], q[7 * i + 3], q[7 * i + 5]
+            st = WheelsetState(y, z, a, c, qt[7 * i + 1], qt[7 * i + 2], qt[7 * i + 3],
+                               math.cos(a) * qt[7 * i + 5], qt[7 * i + 6])
+            ref = np.array(generalized_forces(SCALAR, st, law.geometry(y), V, 0.0, P,
+                                              law.reference_load_N), dtype=float)
+            Is, spin = P.spin_inertia_kg_m2, st.spin_t
+            ref[3] -= Is * spin * st.yaw_t
+            ref[5] += Is * spin * st.roll_t
+            keep = [0, 1, 2, 3, 5, 6]  # the pitch entry: held (the free wheelset's is 0)
+            scale = np.abs(ref).max()
+            np.testing.assert_array_less(np.abs(got[i, keep] - ref[keep]), 1e-9 * scale)
 
 
 def test_compiled_outputs_are_the_python_law(contact):
@@ -102,6 +168,9 @@ def test_compiled_outputs_are_the_python_law(contact):
     for q, qt in states(contact, rng, 20):
         out = contact.outputs(q, qt)
         for i, fr in enumerate(contact._frames):
+            e_mean = 0.5 * (fr.rails[0][0] + fr.rails[1][0])
+            assert out.lateral_to_rails_m[i] == pytest.approx(out.lateral_m[i] - e_mean,
+                                                              rel=1e-15, abs=1e-18)
             _, wheels, (ry, yaw) = _wheelset(SCALAR, contact._table, contact._setup,
                                              contact._ref[i], fr, q[7 * i:7 * i + 7].tolist(),
                                              qt[7 * i:7 * i + 7].tolist())
@@ -173,20 +242,45 @@ def test_kernels_give_the_same_forces_without_numba(contact):
     np.testing.assert_array_less(np.abs(got - ref), 1e-12 * scale)
 
 
-def test_a_changed_dependency_names_a_new_cache_entry(tmp_path):
-    """numba re-validates a cached kernel against its own file only; the kernel's name carries
-    a digest of every file it depends on, so editing the law cannot leave a stale kernel."""
-    dep = tmp_path / "law.py"
-    dep.write_text("a = 1\n")
+def test_an_edited_law_is_not_run_from_a_stale_cache(tmp_path):
+    """numba re-validates a cached kernel against its own file only. A kernel that calls a
+    jitable law from another file is compiled and cached in one process; the law is edited;
+    a new process must run the edited law (without the digest in the kernel's name it loads
+    the cached machine code of the old one)."""
+    (tmp_path / "law_mod.py").write_text(
+        "from vehicle.wheelrail.compiled import jitable\n"
+        "@jitable\n"
+        "def law(x):\n"
+        "    return 1.0 * x\n")
+    (tmp_path / "kernel_mod.py").write_text(
+        "import law_mod\n"
+        "from vehicle.wheelrail.compiled import kernel\n"
+        "@kernel(__file__, law_mod.__file__)\n"
+        "def run(x):\n"
+        "    return law_mod.law(x)\n")
+    code = "import kernel_mod; print(kernel_mod.run(3.0))"
 
-    def make():
-        def fn(x):
-            return x + 1.0
-        k = compiled.kernel(str(dep))(fn)
-        k(1.0)
-        return fn.__qualname__
+    def run():
+        res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(tmp_path)
+                                                    + os.pathsep + os.getcwd()))
+        assert res.returncode == 0, res.stderr
+        return float(res.stdout)
 
-    first = make()
-    assert make() == first
-    dep.write_text("a = 2\n")
-    assert make() != first
+    assert run() == 3.0
+    assert list((tmp_path / "__pycache__").glob("kernel_mod.run_*.nbi"))  # it was cached
+    (tmp_path / "law_mod.py").write_text((tmp_path / "law_mod.py").read_text()
+                                         .replace("1.0 * x", "2.0 * x"))
+    assert run() == 6.0
+
+
+def test_wrong_lengths_are_refused_before_the_kernels(contact):
+    """The kernels do not check bounds: a wrong length must not reach them."""
+    q = np.zeros(28)
+    for bad in (np.zeros(21), np.zeros(35)):
+        with pytest.raises(ValueError, match="28 entries"):
+            contact.forces(bad, bad)
+        with pytest.raises(ValueError, match="28 entries"):
+            contact.jacobian(q, bad, 1.0, 1.0)
+    with pytest.raises(ValueError, match="need 4 frames"):
+        contact.set_track([(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)] * 3)

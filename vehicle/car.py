@@ -74,16 +74,17 @@ on level track.
   frame at its own arc length (position, heading, cant, curvature from the
   :class:`~vehicle.guidance.TrackSampler`; the rail heights and cross-level roll that frame,
   lateral alignment and gauge move each rail).
-  The law runs as one Python force user function for the whole car (one call per residual
-  evaluation) with a vectorised finite-difference Jacobian user function. Outputs:
+  The law runs as one force user function for the whole car (one call per residual evaluation)
+  with a finite-difference Jacobian user function, both compiled by numba
+  (:mod:`vehicle.wheelrail.compiled`). Outputs:
   :meth:`MetroCar.lateral_wheel_forces_N`, :meth:`MetroCar.wheel_loads_N` (normal to the track
   plane), :meth:`MetroCar.wheelset_lateral_forces_N`,
   :meth:`MetroCar.wheelset_lateral_displacement_m`, :meth:`MetroCar.angle_of_attack_rad`,
   :meth:`MetroCar.flange_contact`, :meth:`MetroCar.contact_state`. Static start: each wheelset
   at the height where the contact carries the static wheel load (no settling transient).
   Standstill: creepages are divided by max(v, ``min_creep_speed_m_per_s`` = 0.01 m/s).
-  Cost (benchmarks/bench_vehicle_curve.py --contact): 3.4 times the kinematic car on the
-  paper's curve entry (the contact law is evaluated in Python ~6 times per step).
+  Cost (benchmarks/bench_vehicle_curve.py --contact): COSTCAR times the kinematic car on the
+  paper's curve entry (docs/wheel_rail.md, "Cost").
 
 Newton's third law in the strong form (moment balance). A force pair between body-fixed points
 that separate is not collinear and leaves a couple d x f: the bellow pair (F = 42 kN over the
@@ -907,9 +908,9 @@ class MetroCar:
         """Contact guidance (``guidance="contact"``): a spin node per wheelset and one
         ``ObjectGenericODE2`` on all four wheelset bodies and spin nodes (28 coordinates, per
         wheelset the body's 6 and its spin) whose force user function is the contact law of
-        the 8 wheels (:class:`~vehicle.wheelrail.track_contact.WheelsetTrackContact`, Python:
-        one call per residual evaluation for the whole car) and whose Jacobian user function
-        differentiates the same law (forward differences, one vectorised evaluation).
+        the 8 wheels (:class:`~vehicle.wheelrail.track_contact.WheelsetTrackContact`: one call
+        per residual evaluation for the whole car) and whose Jacobian user function
+        differentiates the same law (forward differences); both run compiled kernels.
 
         Spin nodes: one coordinate each, the rotation about the axle relative to the
         non-rotating wheelset body, with the wheelsets' spin inertia (``wheelset_inertia_yy``;

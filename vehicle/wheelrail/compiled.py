@@ -16,8 +16,10 @@ that they agree to rounding.
 
 numba invalidates a cached kernel when the file that defines the kernel changes, not when a
 function it calls from another file does. A kernel's name therefore carries a digest of the
-source files given to :func:`kernel` (``depends``): a change to the law compiles afresh instead
-of running a stale kernel.
+source files given to :func:`kernel` (``depends``), taken when they are imported: a change to
+the law compiles afresh instead of running a stale kernel (and a file changed after it was
+imported compiles without the cache). Old cache files stay in ``__pycache__`` (or numba's cache
+folder) until removed; each set is ~1 MB.
 
 Without numba installed, or with ``NUMBA_DISABLE_JIT=1``, the kernels run as Python: the same
 numbers, many times slower.
@@ -29,6 +31,7 @@ import hashlib
 import importlib.util
 import math
 import os
+import warnings
 from typing import Callable, NamedTuple
 
 from . import kernel_ops
@@ -73,16 +76,29 @@ def jitable(fn: Callable) -> Callable:
 
 def _activate() -> None:
     """Once per process: register the jitable functions and the kernels' operations
-    (:mod:`vehicle.wheelrail.kernel_ops`) with numba."""
+    (:mod:`vehicle.wheelrail.kernel_ops`) with numba. If numba is installed but does not import
+    (e.g. built for another numpy), the kernels run as Python, with a warning."""
     if "njit" not in _STATE:
+        _STATE["njit"] = None
         if numba_available():
-            import numba
-            from numba.extending import register_jitable
+            try:
+                import numba
+                from numba.extending import register_jitable
+            except ImportError as exc:
+                warnings.warn(f"numba does not import ({exc}); the contact law runs as Python, "
+                              f"many times slower", RuntimeWarning, stacklevel=3)
+                return
             for fn in _JITABLE + list(kernel_ops.OPERATIONS):
                 register_jitable(fn)
             _STATE["njit"] = numba.njit
-        else:
-            _STATE["njit"] = None
+
+
+def _digest(paths: tuple[str, ...]) -> str:
+    digest = hashlib.sha256()
+    for path in paths:
+        with open(path, "rb") as fh:
+            digest.update(fh.read())
+    return digest.hexdigest()[:16]
 
 
 class _Kernel:
@@ -91,6 +107,8 @@ class _Kernel:
     def __init__(self, fn: Callable, depends: tuple[str, ...]):
         self.py_func = fn
         self._depends = depends
+        # the sources as imported: the code numba will compile is the code loaded now
+        self._digest = _digest(depends)
         self._call = None
         self.__doc__ = fn.__doc__
         self.__name__ = fn.__name__
@@ -100,12 +118,17 @@ class _Kernel:
         njit = _STATE["njit"]
         if njit is None:
             return self.py_func
-        digest = hashlib.sha256()
-        for path in self._depends:
-            with open(path, "rb") as fh:
-                digest.update(fh.read())
-        self.py_func.__qualname__ = f"{self.py_func.__name__}_{digest.hexdigest()[:16]}"
-        return njit(cache=True)(self.py_func)
+        if _digest(self._depends) != self._digest:
+            # a source changed since it was imported: the loaded code is not what the files
+            # say, so compile it without reading or writing the cache
+            return njit(self.py_func)
+        self.py_func.__qualname__ = f"{self.py_func.__name__}_{self._digest}"
+        try:
+            return njit(cache=True)(self.py_func)
+        except RuntimeError as exc:  # no writable cache folder anywhere
+            warnings.warn(f"the contact kernels cannot be cached ({exc}); they compile in "
+                          f"every process (a few seconds)", RuntimeWarning, stacklevel=3)
+            return njit(self.py_func)
 
     def __call__(self, *args):
         call = self._call

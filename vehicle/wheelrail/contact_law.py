@@ -2,13 +2,16 @@
 
 One law, written once against a small table of math operations (``ops``), evaluates either
 
-* numbers (:data:`SCALAR` with ``math``: the Python force user function of the exudyn model
-  ``vehicle.wheelrail.wheelset``; :data:`NUMPY` for arrays, e.g. along a whole time series), or
+* numbers (:data:`SCALAR` with ``math``; :data:`NUMPY` for arrays, e.g. along a whole time
+  series; the Python force user function of the exudyn model ``vehicle.wheelrail.wheelset``),
+* machine code: the car's contact (``vehicle.wheelrail.track_contact``) runs it in kernels that
+  numba compiles from these same functions (:mod:`vehicle.wheelrail.compiled`), or
 * an exudyn symbolic expression tree (``vehicle.wheelrail.wheelset`` passes its own ``ops``)
   that exudyn evaluates in C++ (optional there: slower for this law, see that module).
 
 So the force law the tests check without exudyn is, operation for operation, the one exudyn runs.
-This module imports numpy/scipy only (``tests/test_wheelrail.py`` checks the subpackage).
+This module imports numpy/scipy only (``tests/test_wheelrail.py`` checks the subpackage; numba
+is imported when the first kernel compiles).
 
 Frames, coordinates, signs
 --------------------------
@@ -172,7 +175,7 @@ NUMPY = Ops(np.sqrt, np.sin, np.cos, np.arctan2, np.power, np.where, np.maximum,
 
 class WheelGeometry(NamedTuple):
     """One wheel's contact geometry at the wheelset's lateral position (floats, arrays or
-    expressions; :meth:`ContactLawTable.wheel_geometry`): rolling radius ``r`` [m], contact
+    expressions; :meth:`of_side` of :meth:`ContactLawTable.geometry`): rolling radius ``r`` [m], contact
     angle ``gamma`` [rad], lateral contact position ``yc`` [m], Kalker coefficients ``k11`` ..
     ``k33`` at the table's reference load, the wheelset's rigid-contact ``roll0`` [rad] and
     ``dz0`` [m], and their slopes in y ``droll0`` [rad/m], ``ddz0`` [-]."""
