@@ -83,7 +83,7 @@ on level track.
   :meth:`MetroCar.flange_contact`, :meth:`MetroCar.contact_state`. Static start: each wheelset
   at the height where the contact carries the static wheel load (no settling transient).
   Standstill: creepages are divided by max(v, ``min_creep_speed_m_per_s`` = 0.01 m/s).
-  Cost (benchmarks/bench_vehicle_curve.py --contact): COSTCAR times the kinematic car on the
+  Cost (benchmarks/bench_vehicle_curve.py --contact): 1.45 times the kinematic car on the
   paper's curve entry (docs/wheel_rail.md, "Cost").
 
 Newton's third law in the strong form (moment balance). A force pair between body-fixed points

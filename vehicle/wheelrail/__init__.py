@@ -1,5 +1,6 @@
 """Wheel-rail contact physics, pure numpy/scipy (no exudyn, no pneumatics/cosim imports) except
-the exudyn wheelset model :mod:`vehicle.wheelrail.wheelset`, which this package does not import.
+the exudyn wheelset model :mod:`vehicle.wheelrail.wheelset`, which this package does not import;
+numba compiles the car's contact kernels when they are first called.
 
 * :mod:`vehicle.wheelrail.profiles` -- SIMPACK ``.prw``/``.prr`` and 2-column profile readers;
 * :mod:`vehicle.wheelrail.geometry` -- rigid contact search, :class:`ContactTable`
@@ -13,7 +14,9 @@ the exudyn wheelset model :mod:`vehicle.wheelrail.wheelset`, which this package 
   exudyn, hence not imported here);
 * :mod:`vehicle.wheelrail.track_contact` -- that law on the wheelsets of a multibody vehicle in
   global coordinates, each with its own track frame and rails (the car's contact guidance;
-  pure math, the exudyn wrapping is in ``vehicle/car.py``);
+  pure math, the exudyn wrapping is in ``vehicle/car.py``), run as compiled kernels;
+* :mod:`vehicle.wheelrail.compiled`, :mod:`vehicle.wheelrail.kernel_ops` -- compiling the law
+  with numba (one source; cached on disk);
 * ``python -m vehicle.wheelrail.derive_table [--nominal-radius-m R]`` rewrites the shipped tables.
 
 See ``docs/wheel_rail.md``.
