@@ -40,6 +40,9 @@ def kinematic_twin(scenario: Path, folder: Path) -> Path:
     curve["guidance"] = "kinematic"
     for key in CONTACT_KEYS:
         curve.pop(key, None)
+    irregularity = curve.get("irregularity")
+    if isinstance(irregularity, dict) and "file" in irregularity:  # relative to the scenario
+        irregularity["file"] = str((scenario.parent / irregularity["file"]).resolve())
     data["checks"] = [c for c in data.get("checks", [])
                       if c.split()[0].split("[")[0] not in CONTACT_METRICS]
     path = folder / scenario.name.replace(".yaml", "_kinematic.yaml")

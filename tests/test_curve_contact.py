@@ -259,10 +259,32 @@ def test_bad_contact_keys_name_the_key(tmp_path, name):
 
 
 def test_shipped_contact_scenarios_load():
-    for name in ("curve_entry_contact.yaml", "curve_r150_twisted.yaml", "straight_irregular.yaml"):
+    for name in ("curve_entry_contact.yaml", "curve_r150_twisted.yaml", "curve_r150_dip.yaml",
+                 "straight_irregular.yaml"):
         s = load_scenario(SCENARIOS / name)
         assert s.curve.contact and {c.metric for c in s.checks} == {"yq_max", "sum_y_max", "dqq_max"}
     s = load_scenario(SCENARIOS / "straight_irregular.yaml")
     t = s.curve.track_irregularity(s.vehicle)
     assert t.vertical_m.any() == False and np.abs(t.lateral_m).max() > 1e-3  # noqa: E712 (lateral only)
     assert dataclasses.replace(s.curve, irregularity=None).track_irregularity(s.vehicle) is None
+
+
+def test_the_method_1_dip_lowers_the_outer_rail_within_the_twist_limits():
+    """curve_r150_dip.yaml: the outer (right, left-hand curve) rail falls 40 mm at 7 per mille
+    (EN 14363's limit over the 2 m bogie wheelbase), i.e. 4 per mille over the 10 m bogie-centre
+    base, while the inner rail stays at design height. Checked on the rail heights the car
+    reads (z_L = vertical - cross/2, z_R = vertical + cross/2), not on the file's numbers."""
+    s = load_scenario(SCENARIOS / "curve_r150_dip.yaml")
+    assert s.curve.direction == 1 and s.curve.radius_m == 150.0 and s.curve.cant_rad == 0.0
+    t = s.curve.track_irregularity(s.vehicle)
+    x = np.arange(0.0, 110.0, 0.05)
+    _, vertical, cross, _ = t(x)
+    z_left, z_right = vertical - 0.5 * cross, vertical + 0.5 * cross
+    assert np.abs(z_left).max() < 1e-9
+    assert z_right.min() == pytest.approx(-0.040, abs=1e-6)
+    twist = lambda base: np.abs(np.interp(x + base, x, z_right) - z_right).max() / base  # noqa: E731
+    assert twist(2.0) == pytest.approx(7e-3, rel=0.02)  # PCHIP rounds the ramp's corners
+    assert twist(10.0) == pytest.approx(4e-3, rel=0.01)
+    # the dip lies in the arc (from 35 m), ahead of the car at t = 0 (front wheelset at 12 m)
+    in_dip = x[z_right < -1e-6]
+    assert 50.0 <= in_dip.min() and in_dip.max() <= 81.5
