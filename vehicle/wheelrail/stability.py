@@ -16,7 +16,8 @@ right wheel from the tread over the flange root onto the flank. Creep forces are
 they are what drives the flange-contact flutter of a lightly damped normal contact.
 
 Pure numpy/scipy (no exudyn): ``python -m vehicle.wheelrail.stability`` prints the sweep for
-the shipped table of the car's 0.42 m wheels.
+the shipped table of the car's 0.42 m wheels; ``--weak-mode`` what the weak ~40 Hz mode on the
+flank depends on (:func:`weak_mode_study`).
 """
 from __future__ import annotations
 
@@ -28,10 +29,10 @@ from typing import NamedTuple, Sequence
 import numpy as np
 from scipy.optimize import fsolve
 
-from .contact_law import SCALAR, ContactLawTable, WheelsetParams, WheelsetState, \
-    generalized_forces
+from .contact_law import GEOMETRY_COLUMNS, SCALAR, ContactLawTable, WheelsetParams, \
+    WheelsetState, generalized_forces
 
-__all__ = ["Restraint", "SteadyFlanging", "flange_sweep"]
+__all__ = ["Restraint", "SteadyFlanging", "flange_sweep", "weakest_mode", "weak_mode_study"]
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,7 @@ class SteadyFlanging(NamedTuple):
     gamma_right_rad: float  # contact angle of the right (flanging) wheel
     residual: float  # largest scaled residual of the steady state (converged: ~1e-12)
     eigenvalues: np.ndarray  # of the linearised motion about it [1/s]
+    system_matrix: np.ndarray  # that linearisation, d/dt x = A x, x = (q, q', spin rate)
 
     def growth_per_s(self, above_hz: float = 0.0) -> float:
         """Largest real part of the eigenvalues oscillating above ``above_hz`` [1/s]."""
@@ -120,11 +122,69 @@ def flange_sweep(law: ContactLawTable, params: WheelsetParams,
             A[:, j] = (rhs(x0 + dx, F) - rhs(x0 - dx, F)) / (2.0 * h)
         out.append(SteadyFlanging(float(F), float(u[0]),
                                   float(law.geometry(u[0])["gamma_R"]),
-                                  float(np.abs(steady(u)).max()), np.linalg.eigvals(A)))
+                                  float(np.abs(steady(u)).max()), np.linalg.eigvals(A), A))
     return out
 
 
+def weakest_mode(state: SteadyFlanging, params: WheelsetParams, above_hz: float = 10.0):
+    """The least damped mode oscillating above ``above_hz``: (growth [1/s], frequency [Hz], the
+    share of each velocity (y', z', roll', yaw', spin) in its kinetic energy)."""
+    w, vectors = np.linalg.eig(state.system_matrix)
+    k = int(np.argmax(np.where(np.abs(w.imag) >= 2.0 * math.pi * above_hz, w.real, -np.inf)))
+    p = params
+    inertia = np.array([p.mass_kg, p.mass_kg, p.roll_inertia_kg_m2, p.yaw_inertia_kg_m2,
+                        p.spin_inertia_kg_m2])
+    energy = inertia * np.abs(vectors[4:, k]) ** 2
+    return float(w[k].real), float(abs(w[k].imag) / (2.0 * math.pi)), energy / energy.sum()
+
+
+def _without(law: ContactLawTable, prefixes: tuple[str, ...]) -> ContactLawTable:
+    """A copy of ``law`` whose Kalker coefficients with these prefixes are 0 (those creep terms
+    switched off)."""
+    import copy
+    out = copy.copy(law)
+    out.values = law.values.copy()
+    for j, name in enumerate(GEOMETRY_COLUMNS):
+        if name.startswith(prefixes):
+            out.values[j] = 0.0
+    out.slopes = np.diff(out.values, axis=1) / np.diff(out.y)
+    return out
+
+
+def weak_mode_study(load_N: float = -40e3) -> None:
+    """What the weak ~40 Hz flanging mode depends on: the least damped mode above 10 Hz at
+    ``load_N`` with terms of the model switched off or scaled one at a time."""
+    from dataclasses import replace
+
+    from .geometry import ContactTable, table_path
+
+    table = ContactTable.from_csv(table_path(0.42))
+    loads = np.linspace(0.0, load_N, 11)
+    base = WheelsetParams()
+    law = ContactLawTable(table, base)
+    variants = [("shipped law", law, base)]
+    for f in (0.25, 10.0, 100.0):
+        p = replace(base, spin_inertia_kg_m2=base.spin_inertia_kg_m2 * f)
+        variants.append((f"spin inertia x{f:g}", ContactLawTable(table, p), p))
+    variants += [("longitudinal creep off (k11 = 0)", _without(law, ("k11",)), base),
+                 ("spin creep off (k23 = k33 = 0)", _without(law, ("k23", "k33")), base)]
+    p = replace(base, contact_damping_N_s_per_m=2.0 * base.contact_damping_N_s_per_m)
+    variants.append(("normal damping x2", ContactLawTable(table, p), p))
+    print(f"least damped mode above 10 Hz at F = {load_N / 1e3:g} kN (kinetic energy shares of "
+          f"y', z', roll', yaw', spin)")
+    for label, variant, p in variants:
+        state = flange_sweep(variant, p, loads)[-1]
+        growth, hz, share = weakest_mode(state, p)
+        print(f"  {label:34s} {growth:+7.2f} /s {hz:6.1f} Hz  "
+              + " ".join(f"{x:.2f}" for x in share))
+
+
 def main() -> None:
+    import sys
+
+    if "--weak-mode" in sys.argv[1:]:
+        weak_mode_study()
+        return
     from .geometry import ContactTable, table_path
 
     table = ContactTable.from_csv(table_path(0.42))
