@@ -49,12 +49,12 @@ def creeping(law):
     return WheelsetTrackContact(law, WheelsetParams(), REFS, R0, 0.3)
 
 
-def states(wr, rng, count, edges=True):
+def states(wr, rng, count):
     """``count`` random (q, q_t) around rolling on a curve (set as the track of ``wr``): every
     wheelset at a lateral position across the whole table (tread, flange root, flank), in
     contact (pressed 20-60 um into the rails), yawed, rolled, with rates, on a canted curve with
-    rail offsets. With ``edges``, every third state has one wheelset beyond the table (its end
-    rows hold) and one lifted 1 mm off the rails (no contact)."""
+    rail offsets. About every third state has one wheelset beyond the table (its end rows hold)
+    and one lifted 1 mm off the rails (no contact)."""
     z0 = wr.static_rise_m(30e3)
     lo, hi = wr.table.y_range_m
     for _ in range(count):
@@ -79,7 +79,7 @@ def states(wr, rng, count, edges=True):
             qt[7 * i:7 * i + 6] += np.r_[1e-2 * rng.standard_normal(3),
                                          1e-2 * rng.standard_normal(3)]
             qt[7 * i + 6] = wr.V / R0 * (1.0 + 1e-3 * rng.standard_normal())
-        if edges and rng.random() < 1 / 3:
+        if rng.random() < 1 / 3:
             i, j = rng.choice(4, size=2, replace=False)
             q[7 * i:7 * i + 3] += 1.3 * hi * np.array(wr._frames[i].l)
             q[7 * j:7 * j + 3] += 1e-3 * np.array(wr._frames[j].n)
@@ -141,13 +141,14 @@ def test_compiled_forces_are_the_free_wheelset_law(contact, law):
     for _ in range(40):
         q, qt = np.zeros(28), np.zeros(28)
         for i in range(4):
-            a, c = 1e-3 * rng.standard_normal(), 5e-3 * rng.standard_normal()
-            q[7 * i:7 * i + 6] = [0.0, rng.uniform(0.8 * lo, 0.8 * hi),
-                                  z0 - rng.uniform(2e-5, 6e-5), a, 0.0, c]
-            qt[7 * i:7 * i + 7] = [V, *(1e-2 * rng.standard_normal(2)), *(1e-2 * rng.standard_normal(2)),
-                                   0.0, V / R0 * (1.0 + 1e-3 * rng.standard_normal())]
-            qt[7 * i + 4] = 0.0
-            qt[7 * i + 5] = 1e-2 * rng.standard_normal()
+            k = 7 * i
+            # positions (x, y, z, a = roll, b = pitch = 0, c = yaw) and rates (x' = V, y', z',
+            # a', b' = 0, c', spin)
+            q[k:k + 6] = [0.0, rng.uniform(0.8 * lo, 0.8 * hi), z0 - rng.uniform(2e-5, 6e-5),
+                          1e-3 * rng.standard_normal(), 0.0, 5e-3 * rng.standard_normal()]
+            y_t, z_t, a_t, c_t = 1e-2 * rng.standard_normal(4)
+            qt[k:k + 7] = [V, y_t, z_t, a_t, 0.0, c_t,
+                           V / R0 * (1.0 + 1e-3 * rng.standard_normal())]
         got = wr.forces(q, qt).reshape(4, 7)
         for i in range(4):
             y, z, a, c = q[7 * i + 1], q[7 * i + 2], q[7 * i + 3], q[7 * i + 5]
