@@ -196,8 +196,7 @@ class WheelGeometry(NamedTuple):
     def of_side(cls, geo, side: str) -> "WheelGeometry":
         """The ``side``'s ("L" or "R") wheel from a mapping of the :data:`GEOMETRY_COLUMNS`
         and ``droll0``, ``ddz0`` (e.g. :meth:`ContactLawTable.geometry`)."""
-        return cls(*(geo[k] for k in _SIDE_KEYS[side][1]), geo["roll0"], geo["dz0"],
-                   geo["droll0"], geo["ddz0"])
+        return tuple.__new__(cls, map(geo.__getitem__, _WHEEL_KEYS[side]))
 
 
 class LawConstants(NamedTuple):
@@ -246,6 +245,11 @@ GEOMETRY_COLUMNS = (
 _SIDE_KEYS = {side: (sign, tuple(f"{name}_{side}" for name in
                                  ("r", "gamma", "yc", "k11", "k22", "k23", "k33")))
               for side, sign in (("L", 1.0), ("R", -1.0))}
+
+
+#: per side: the keys in ``geo`` of that wheel's WheelGeometry fields, in their order
+_WHEEL_KEYS = {side: keys + ("roll0", "dz0", "droll0", "ddz0")
+               for side, (_, keys) in _SIDE_KEYS.items()}
 
 
 #: Gaussian smoothing (standard deviation, mm of lateral displacement) of the contact geometry
@@ -479,8 +483,10 @@ def force_and_moment(ops, w, yaw):
 def wheelset_forces(ops, st: WheelsetState, geo, V, kappa, p: WheelsetParams,
                     reference_load_N: float, V_ref=None) -> tuple[WheelContact, WheelContact]:
     """Both wheels' :func:`wheel_contact` (left, right)."""
-    return (wheel_contact(ops, "L", st, geo, V, kappa, p, reference_load_N, V_ref),
-            wheel_contact(ops, "R", st, geo, V, kappa, p, reference_load_N, V_ref))
+    c = p.law_constants(reference_load_N)  # once for both wheels: this is a hot path
+    inv_V = 1.0 / (V if V_ref is None else V_ref)
+    return (contact(ops, 1.0, st, WheelGeometry.of_side(geo, "L"), V, kappa, c, inv_V),
+            contact(ops, -1.0, st, WheelGeometry.of_side(geo, "R"), V, kappa, c, inv_V))
 
 
 def generalized_forces(ops, st: WheelsetState, geo, V, kappa, p: WheelsetParams,

@@ -6,7 +6,7 @@ Pure math (no exudyn import): ``vehicle/car.py`` wraps it in an exudyn ``ObjectG
 force user function (:meth:`WheelsetTrackContact.forces`) and a Jacobian user function
 (:meth:`WheelsetTrackContact.jacobian`). Both, and :meth:`WheelsetTrackContact.outputs`, are
 kernels numba compiles from the functions below and the law's own
-(:mod:`vehicle.wheelrail.compiled`): one call for the 8 wheels of a car costs ~3.5 us, against
+(:mod:`vehicle.wheelrail.compiled`): one call for the 8 wheels of a car costs ~4 us, against
 ~65 us for the same law in Python.
 
 Coordinates (per wheelset, 7): the wheelset body's exudyn ``RotationRxyz`` node coordinates
@@ -68,9 +68,6 @@ __all__ = ["WheelsetTrackContact", "WheelContactOutputs", "COORDINATES_PER_WHEEL
 COORDINATES_PER_WHEELSET = 7
 
 _SIDES = ("L", "R")
-_contact_law_file = _contact_law.__file__
-_compiled_file = compiled.__file__
-_kernel_ops_file = kernel_ops.__file__
 
 
 class WheelContactOutputs(NamedTuple):
@@ -102,10 +99,6 @@ class _Frame(NamedTuple):
     rails: tuple  # ((e, e_t) left, (e, e_t) right): lateral rail offsets and rates
 
 
-#: length of a frame packed into a row of floats (:func:`_packed`, :func:`_unpacked`)
-_FRAME_ROW = 21
-
-
 def _frame(x, y, heading, cant, curvature, cant_rate, V, rails, b) -> _Frame:
     (eL, eLt, zL, zLt), (eR, eRt, zR, zRt) = rails
     cp, sp = math.cos(heading), math.sin(heading)
@@ -122,7 +115,7 @@ def _frame(x, y, heading, cant, curvature, cant_rate, V, rails, b) -> _Frame:
 
 
 def _packed(fr: _Frame) -> list:
-    """A frame as :data:`_FRAME_ROW` floats (the kernels' input)."""
+    """A frame as a row of 21 floats (the kernels' input; :func:`_unpacked` reads it)."""
     (eL, eLt), (eR, eRt) = fr.rails
     return [fr.ox, fr.oy, fr.oz, fr.oz_t, *fr.t, *fr.l, *fr.n, *fr.w, fr.kappa, eL, eLt, eR,
             eRt]
@@ -238,7 +231,8 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
     return Q, ((wl, Fl), (wr, Fr)), (ry, yaw)
 
 
-_DEPENDS = (__file__, _contact_law_file, _compiled_file, _kernel_ops_file)
+#: the sources of every function the kernels compile (their cache is named by a digest of these)
+_DEPENDS = (__file__, _contact_law.__file__, compiled.__file__, kernel_ops.__file__)
 
 
 @kernel(*_DEPENDS)
@@ -350,10 +344,16 @@ class WheelsetTrackContact:
         self._table = (np.ascontiguousarray(law_table.y),
                        np.ascontiguousarray(law_table.values[idx]),
                        np.ascontiguousarray(law_table.slopes[idx]))
-        self._setup = _Setup(params.law_constants(self.N_ref), self.V, 1.0 / self.V_ref,
-                             self.r0, float(params.spin_inertia_kg_m2))
-        self._setup_row = np.array([*self._setup.law, *self._setup[1:]])
+        # the kernels' constants as a flat array (its _Setup: the property below)
+        self._setup_row = np.array([*params.law_constants(self.N_ref), self.V,
+                                    1.0 / self.V_ref, self.r0, params.spin_inertia_kg_m2],
+                                   dtype=float)
         self.set_track([(r[0], 0.0, 0.0, 0.0, 0.0, 0.0) for r in self._ref])
+
+    @property
+    def _setup(self) -> _Setup:
+        """The kernels' constants (:func:`_unpacked_setup` of ``_setup_row``)."""
+        return _unpacked_setup(self._setup_row)
 
     # ------------------------------------------------------------------ per step
     def set_track(self, frames: Sequence[tuple], rails=None) -> None:
