@@ -33,6 +33,7 @@ def make_car(scenario: Scenario) -> MetroCar:
     each worker: the same track in every one)."""
     curve = scenario.curve
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, track=curve.track(),
+                    spectral_radius=scenario.solver.spectral_radius,
                     speed_m_per_s=curve.speed_m_per_s, guidance=curve.guidance,
                     contact=curve.contact_params() if curve.contact else None,
                     irregularity=curve.track_irregularity(scenario.vehicle))

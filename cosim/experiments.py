@@ -19,7 +19,7 @@ from pneumatics.rig import bellow_tank_components
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
 from vehicle.irregularities import TrackIrregularity
 from vehicle.params import ContactParams, VehicleParams
-from vehicle.track import TrackGeometry
+from vehicle.track import TRANSITION_SHAPES, TrackGeometry  # noqa: F401 (re-exported)
 
 from .checks import Check
 
@@ -148,6 +148,8 @@ class TwistTest:
 
 #: default length of the final window the quasi-static end values are averaged over [s]
 DEFAULT_WINDOW_S = 5.0
+#: default spectral radius of the multibody integrator (:class:`SolverSettings`)
+DEFAULT_SPECTRAL_RADIUS = 0.8
 
 
 def en14363_twist_limit(base_m: float) -> float:
@@ -161,7 +163,12 @@ def en14363_twist_limit(base_m: float) -> float:
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """Co-simulation settings (see cosim/master.py for the scheme)."""
+    """Co-simulation settings (see cosim/master.py for the scheme). ``spectral_radius``: the
+    multibody integrator's (generalized-alpha) spectral radius at infinite frequency, rho in
+    [0, 1]: how much it damps what its step cannot resolve (1: nothing; 0: the most; the
+    integrator stays second order for every rho). The wheelsets' modes on their contacts lie at
+    ~250 Hz, far beyond a 5 ms step; see docs/models.md, "Numerical damping", for how the
+    default was chosen."""
 
     macro_step_s: float = 0.005
     mechanics_step_s: float = 0.005
@@ -169,6 +176,7 @@ class SolverSettings:
     coupling: str = "linearised"
     output_interval_s: float = 0.02
     jobs: int = 2
+    spectral_radius: float = DEFAULT_SPECTRAL_RADIUS
 
 
 @dataclass(frozen=True)
@@ -226,8 +234,11 @@ def _irregularity(spec: IrregularitySpec, track_length_m: float, start_m: float)
 
 @dataclass(frozen=True)
 class CurveTest:
-    """Curve entry (paper §4.2, Fig. 9): straight, clothoid transition (curvature and cant ramp
-    linearly: on canted track a twisted transition), circular arc, at constant speed. The car
+    """Curve entry (paper §4.2, Fig. 9): straight, transition, circular arc, at constant speed.
+    Along the transition curvature and cant change by ``transition_shape``: ``linear`` (a
+    clothoid with a linear cant ramp, the paper's; the rails' roll rate steps at both ends of a
+    canted ramp), ``cosine`` or ``bloss`` (slopes 0 at both ends: no step); on canted track the
+    transition is a twisted track (vehicle/track.py). The car
     starts at rest relative to the straight (rear wheelset at s = 0), so ``straight_m`` must
     hold the whole car. ``valve_settings``: runs with the levelling and differential valves
     disconnected (false) and connected (true). ``window_s``: final window over which the end
@@ -251,6 +262,7 @@ class CurveTest:
     speed_m_per_s: float = 10.0
     straight_m: float = 20.0
     transition_m: float = 15.0
+    transition_shape: str = "linear"
     radius_m: float = 100.0
     arc_m: float = 300.0
     cant_rad: float = 0.0
@@ -279,7 +291,8 @@ class CurveTest:
 
     def track(self) -> TrackGeometry:
         return TrackGeometry.curve_entry(self.straight_m, self.transition_m, self.radius_m, self.arc_m,
-                                         cant_rad=self.cant_rad, direction=self.direction)
+                                         cant_rad=self.cant_rad, direction=self.direction,
+                                         transition_shape=self.transition_shape)
 
     def contact_params(self) -> ContactParams:
         """The contact model's parameters: the defaults, with the keys the scenario gives."""

@@ -19,7 +19,7 @@ Nothing is exchanged at macro-step boundaries: the force the car feels and the s
 are evaluated together, at every Newton iterate of every step.
 
 Solver: exudyn's implicit generalized-alpha (``MainSolverImplicitSecondOrder``, the car's own
-integrator, spectral radius 0.8), fixed step h, one ``SolveSteps`` call. Why not an explicit
+integrator, the scenario's spectral radius), fixed step h, one ``SolveSteps`` call. Why not an explicit
 Runge-Kutta solver (RK44 ...):
 
 * exudyn's explicit solvers ignore algebraic constraints (``CSolverExplicit.cpp``; tried:
@@ -141,9 +141,10 @@ class MonolithicCar:
     """The car of ``scenario`` with the circuit of one heat-transfer coefficient ``k`` as exudyn
     first-order coordinates (see the module docstring), integrated with a fixed step ``step_s``.
 
+    ``spectral_radius``: the integrator's (default: the scenario's ``solver.spectral_radius``);
     ``newton_abs_tol``/``newton_rel_tol``: Newton tolerances (default: the car's)."""
 
-    def __init__(self, scenario: Scenario, k: float, step_s: float, *, spectral_radius: float = 0.8,
+    def __init__(self, scenario: Scenario, k: float, step_s: float, *, spectral_radius: Optional[float] = None,
                  newton_abs_tol: float = 1e-4, newton_rel_tol: float = 1e-8):
         if not step_s > 0:
             raise ValueError(f"step_s must be > 0, got {step_s}")
@@ -188,7 +189,8 @@ class MonolithicCar:
         ti.startTime = 0.0
         ti.endTime = self.step_s
         ti.adaptiveStep = True   # a step Newton fails on is halved and retried: run() then raises
-        ti.generalizedAlpha.spectralRadius = spectral_radius
+        ti.generalizedAlpha.spectralRadius = (scenario.solver.spectral_radius if spectral_radius is None
+                                              else spectral_radius)
         ti.generalizedAlpha.computeInitialAccelerations = True
         ti.newton.useModifiedNewton = True
         # the coupling terms are not in the Jacobian (module docstring): renew it only when the

@@ -32,8 +32,8 @@ from pneumatics.valves import DifferentialPressureValve, LevellingValve
 from vehicle.params import WHEELS, VehicleParams
 
 from .checks import parse_checks
-from .experiments import (CAR_KINDS, KINDS, RIG_KINDS, RIG_TESTS, CarCircuit, CurveTest, RampTest, RigCircuit, Scenario,
-                          SineTest, SolverSettings, TwistTest, VerifySettings)
+from .experiments import (CAR_KINDS, KINDS, RIG_KINDS, RIG_TESTS, TRANSITION_SHAPES, CarCircuit, CurveTest, RampTest,
+                          RigCircuit, Scenario, SineTest, SolverSettings, TwistTest, VerifySettings)
 from .master import COUPLINGS
 from .presets import VEHICLE_PRESETS
 from .schema import MAX_SAMPLES, ScenarioError, build, check_keys, coerce, describe, k_values, require
@@ -353,6 +353,9 @@ def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
     curve = build(CurveTest, data, path, ["curve"])
     if curve.direction not in (1, -1):
         raise ScenarioError(path, ["curve", "direction"], f"expected 1 (left) or -1 (right), got {curve.direction}")
+    if curve.transition_shape not in TRANSITION_SHAPES:
+        raise ScenarioError(path, ["curve", "transition_shape"], f"expected one of {', '.join(TRANSITION_SHAPES)}, "
+                                                                 f"got {curve.transition_shape!r}")
     car_length = vehicle.bogie_centre_distance_m + vehicle.wheelbase_m
     if curve.straight_m < car_length:
         raise ScenarioError(path, ["curve", "straight_m"], f"the straight must hold the whole car ({car_length:g} m "

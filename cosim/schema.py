@@ -158,6 +158,8 @@ RANGES: Dict[str, Range] = {
     "CurveTest.contact_smoothing_mm": Range(0.0, 1.0, unit="mm",
                                             why="0: the rigid table; 1 mm blurs the flange itself"),
     "SolverSettings.jobs": Range(1, 256, why="worker processes"),
+    "SolverSettings.spectral_radius": Range(0.0, 1.0, unit="",
+                                            why="generalized-alpha: 1 damps nothing, 0 the most"),
     "VerifySettings.tolerance": Range(0.0, 1.0, False, False, why="a relative error"),
     "VerifySettings.levels": Range(2, 6, why="halvings of every step; each doubles the cost of the last run"),
     # vehicle: every parameter is a mass, inertia, length, height above rail, stiffness, damping or

@@ -172,7 +172,7 @@ def test_fresnel_and_quadrature_paths_agree():
         rate = (k1 - k0) / length
         assert track_module._fresnel_is_accurate(k0, rate, length)
         f = track_module._fresnel_offset(k0, rate, u * length)
-        q = track_module._quadrature_offset(k0, rate, length, u * length)
+        q = track_module._quadrature_offset(k0, k1 - k0, length, u * length)
         assert np.max(np.abs(f - q)) < 1e-11, (k0, k1, length)
 
 
@@ -258,3 +258,51 @@ def test_segments_are_immutable(paper_track):
         paper_track.segments[0].length_m = 5.0
     with pytest.raises(ValueError):
         paper_track.segment_start_m[0] = 1.0
+
+
+# --- smoothed transitions (cosine, Bloss): checked against their definitions, not the code's
+# own closed forms: the heading is the numerical integral of the curvature, the position the
+# numerical integral of (cos, sin)(heading)
+
+SMOOTH = {"cosine": lambda xi: 0.5 - 0.5 * math.cos(math.pi * xi),
+          "bloss": lambda xi: 3 * xi**2 - 2 * xi**3}
+
+
+@pytest.mark.parametrize("shape", ["cosine", "bloss"])
+def test_smoothed_transition_against_its_definition(shape):
+    cant, L = 0.1, TRANSITION_M
+    track = TrackGeometry.curve_entry(STRAIGHT_M, L, RADIUS_M, ARC_M, cant_rad=cant,
+                                      transition_shape=shape)
+    f = SMOOTH[shape]
+    opts = dict(epsabs=1e-14, epsrel=1e-14, limit=200)
+
+    def heading(u):  # integral of the curvature f(v / L) / R from the transition's start
+        return quad(lambda v: f(v / L) / RADIUS_M, 0.0, u, **opts)[0]
+
+    for u in (0.0, 0.7, 5.0, 7.5, 11.3, L):
+        s = STRAIGHT_M + u
+        assert track.curvature_per_m(s) == pytest.approx(f(u / L) / RADIUS_M, abs=1e-16)
+        assert track.cant_rad(s) == pytest.approx(cant * f(u / L), abs=1e-16)
+        assert track.heading_rad(s) == pytest.approx(heading(u), abs=ANGLE_TOL_RAD)
+        x, y = track.position_m(s)
+        dx, dy = quad_xy(heading, 0.0, u)
+        assert abs(x - STRAIGHT_M - dx) < POS_TOL_M and abs(y - dy) < POS_TOL_M
+    # the point of the shapes: no step in the cant's (and curvature's) slope at either end
+    ends = np.array([STRAIGHT_M, STRAIGHT_M + L, np.nextafter(STRAIGHT_M + L, 0.0)])
+    assert np.all(np.abs(track.cant_slope_per_m(ends)) < 1e-15)
+    # the arc follows on at the curve's own heading: L / (2 R) for every shape (F(1) = 1/2)
+    assert track.heading_rad(STRAIGHT_M + L + 10.0) == pytest.approx(
+        L / (2 * RADIUS_M) + 10.0 / RADIUS_M, abs=ANGLE_TOL_RAD)
+
+
+def test_linear_transition_cant_slope_steps_at_its_ends():
+    cant, L = 0.1, TRANSITION_M
+    track = TrackGeometry.curve_entry(STRAIGHT_M, L, RADIUS_M, ARC_M, cant_rad=cant)
+    before, start = np.nextafter(STRAIGHT_M, 0.0), STRAIGHT_M
+    assert track.cant_slope_per_m(before) == 0.0
+    assert track.cant_slope_per_m(start) == pytest.approx(cant / L, rel=1e-15)
+
+
+def test_unknown_transition_shape_is_refused():
+    with pytest.raises(ValueError, match="shape must be one of linear, cosine, bloss"):
+        Transition(15.0, "parabolic")

@@ -342,19 +342,35 @@ def test_balanced_cant_leaves_the_carbody_square_to_the_track():
 
 
 # ---------------------------------------------------------------- track sampler
-@pytest.mark.parametrize("cant_rad", [0.0, 0.1])
-def test_track_sampler_matches_the_exact_geometry(cant_rad):
+@pytest.mark.parametrize("cant_rad, shape", [(0.0, "linear"), (0.1, "linear"), (0.1, "cosine"),
+                                             (0.15, "bloss")])
+def test_track_sampler_matches_the_exact_geometry(cant_rad, shape):
     # cubic Hermite position with exact tangents at 0.1 m spacing: error ~spacing^4 kappa
-    # kappa' / 128 < 1e-11 m (measured 5e-12 m); heading, cant, curvature exact to round-off.
-    track = TrackGeometry.curve_entry(50.0, 15.0, 100.0, 300.0, cant_rad=cant_rad)
+    # kappa' / 128 < 1e-11 m (measured 5e-12 m); heading, cant, curvature and the cant's slope
+    # exact to round-off on a linear transition. On a smoothed one the Hermites of heading and
+    # cant err by ~spacing^4 max|d4 v| / 384: for cant 1e-4 * 0.15 (pi/15)^4 / 2 / 384
+    # ~ 4e-12 rad; their slopes (curvature, d(cant)/ds) by ~spacing^3 max|d4 v| / 24: 1e-3 *
+    # 0.01 (pi/15)^3 / 2 / 24 ~ 2e-9 1/m for curvature and 1e-3 * 0.15 (pi/15)^4 / 2 / 24
+    # ~ 6e-9 rad/m for the cant's slope.
+    track = TrackGeometry.curve_entry(50.0, 15.0, 100.0, 300.0, cant_rad=cant_rad,
+                                      transition_shape=shape)
     sampler = TrackSampler(track)
     s = np.linspace(0.0, track.total_length_m, 40001)
     x, y, psi, cant, kappa, dcant = sampler(s)
     xe, ye = track.position_m(s)
     assert np.abs(x - xe).max() < 1e-9 and np.abs(y - ye).max() < 1e-9
-    assert np.abs(psi - track.heading_rad(s)).max() < 1e-12
-    assert np.abs(cant - track.cant_rad(s)).max() < 1e-12
-    assert np.abs(kappa - track.curvature_per_m(s)).max() < 1e-12
+    exact = shape == "linear"
+    assert np.abs(psi - track.heading_rad(s)).max() < (1e-12 if exact else 1e-10)
+    assert np.abs(cant - track.cant_rad(s)).max() < (1e-12 if exact else 1e-10)
+    assert np.abs(kappa - track.curvature_per_m(s)).max() < (1e-12 if exact else 5e-9)
+    assert np.abs(dcant - track.cant_slope_per_m(s)).max() < (1e-12 if exact else 1.5e-8)
+    if not exact:
+        # continuous across the grid points: the roll rate has no step the track has not
+        grid = np.arange(50.0, 65.0, 0.1)[1:]
+        below = sampler(grid - 1e-9)
+        above = sampler(grid)
+        assert np.abs(below[5] - above[5]).max() < 1e-9  # d(cant)/ds
+        assert np.abs(below[4] - above[4]).max() < 1e-11  # curvature (kappa' 1e-9 m: 1e-12)
     # the scalar path gives the same numbers
     some = [0.0, 49.99, 50.0, 57.3, 65.0, 200.0, track.total_length_m]
     for si, tup in zip(some, sampler.at(some)):

@@ -1,14 +1,20 @@
 """Fast evaluation of a track centre line at a few arc lengths per time step.
 
-:class:`~vehicle.track.TrackGeometry` is exact (Fresnel integrals) but costs ~150 us per call on
-the four wheelset positions, i.e. ~30 ms per simulated second at 5 ms steps: a fifth of the car's
-whole budget. :class:`TrackSampler` samples the geometry once on a grid that contains every
-segment join and interpolates between the samples:
+:class:`~vehicle.track.TrackGeometry` is exact (Fresnel integrals, quadrature) but costs ~150 us
+per call on the four wheelset positions, i.e. ~30 ms per simulated second at 5 ms steps: a fifth
+of the car's whole budget. :class:`TrackSampler` samples the geometry once on a grid that
+contains every segment join and interpolates between the samples, each interval with the values
+of its own segment at both of its ends (curvature, cant and their slopes may jump at a join):
 
-* heading: exactly, as the quadratic in s it is inside a segment (its end slope is recovered from
-  the two end headings and the start curvature);
-* cant: exactly, as the linear function it is inside a segment (left and mid samples); likewise
-  the curvature (linear) and the cant slope (constant);
+* heading: cubic Hermite with the exact curvature as its slope at both ends; the curvature is
+  its derivative. Exact (to round-off) on straights, arcs and clothoids, where the heading is at
+  most quadratic; on the smoothed transitions (cosine, Bloss) the curvature is continuous across
+  the grid points and within ~spacing^3 max|d3 kappa / ds3| / 24 of the exact one;
+* cant: cubic Hermite with the exact d(cant)/ds at both ends, and d(cant)/ds its derivative:
+  exact on linear ramps, and continuous across the grid points on smoothed ones, so that the
+  rails' roll rate has no step the geometry does not have (a slope held constant per interval
+  would step at every grid point: on a 15 m cosine ramp to 0.15 rad, by ~3e-4 rad/m every
+  0.1 m);
 * position: cubic Hermite with the exact tangents (cos, sin)(heading) at both ends. The error is
   about spacing^4 / 384 * max|d^4 p / ds^4|; on a clothoid d^4 p / ds^4 ~ 3 kappa kappa' (the
   arc alone: kappa^3), so at the default 0.1 m spacing the paper's transition (R = 100 m over
@@ -31,6 +37,14 @@ from .track import TrackGeometry
 __all__ = ["TrackSampler", "shared_sampler"]
 
 
+def _hermite_coefficients(v0, v1, slope0, slope1, d):
+    """(a2, a3) of the cubic v0 + slope0 u + a2 u^2 + a3 u^3 on [0, d] that ends at v1 with
+    slope1 (arrays)."""
+    dv = v1 - v0 - slope0 * d
+    dslope = (slope1 - slope0) * d
+    return (3.0 * dv - dslope) / (d * d), (dslope - 2.0 * dv) / (d * d * d)
+
+
 class TrackSampler:
     """Tabulated :class:`~vehicle.track.TrackGeometry` for repeated evaluation of a few points.
 
@@ -45,37 +59,40 @@ class TrackSampler:
         self.track = track
         self.total_length_m = track.total_length_m
         starts = list(np.asarray(track.segment_start_m, dtype=float)) + [self.total_length_m]
-        left = []  # left ends of the grid intervals; every segment start is one of them
-        for a, b in zip(starts[:-1], starts[1:]):
+        left, segment = [], []  # left ends of the grid intervals (every segment start is one)
+        for k, (a, b) in enumerate(zip(starts[:-1], starts[1:])):
             n = max(1, math.ceil((b - a) / spacing_m))
             left.append(a + (b - a) * np.arange(n) / n)
+            segment.append(np.full(n, k))
         s0 = np.concatenate(left)
+        segment = np.concatenate(segment)
         s1 = np.append(s0[1:], self.total_length_m)
         ds = s1 - s0
-        # samples at the left ends and interval midpoints belong to the interval's own segment;
-        # right ends may be the next segment's start (curvature and cant may jump there), so
-        # only the continuous quantities (position, heading) are taken at the right ends.
+        # heading, curvature, cant and its slope at both ends of each interval from the
+        # interval's own segment (position and heading are continuous at the joins anyway)
+        ends = np.empty((2, 4, s0.size))
+        for k in np.unique(segment):
+            mask = segment == k
+            for side, s in enumerate((s0, s1)):
+                ends[side][:, mask] = track.segment_values(int(k), s[mask] - starts[k])
+        (psi0, kappa0, c0, dc0), (psi1, kappa1, c1, dc1) = ends
         x0, y0 = track.position_m(s0)
         x1, y1 = track.position_m(s1)
-        psi0, psi1 = track.heading_rad(s0), track.heading_rad(s1)
-        kappa0 = track.curvature_per_m(s0)
-        c0, cmid = track.cant_rad(s0), track.cant_rad(0.5 * (s0 + s1))
-        self._s0 = s0
-        self._ds = ds
+        self._s0, self._ds = s0, ds
         self._x0, self._y0, self._x1, self._y1 = x0, y0, x1, y1
-        self._psi0, self._psi1 = psi0, psi1
-        self._kappa0 = kappa0
-        # heading = psi0 + kappa0 u + rate u^2 / 2 inside the interval; rate from the end heading
-        self._half_rate = (psi1 - psi0 - kappa0 * ds) / (ds * ds)
-        self._c0 = c0
-        self._c_slope = 2.0 * (cmid - c0) / ds
+        # per interval the cubic Hermites of heading and cant in the local coordinate u:
+        # value0 + u (slope0 + u (a2 + u a3))
+        self._psi0, self._psi1, self._kappa0 = psi0, psi1, kappa0
+        self._psi_a2, self._psi_a3 = _hermite_coefficients(psi0, psi1, kappa0, kappa1, ds)
+        self._c0, self._dc0 = c0, dc0
+        self._c_a2, self._c_a3 = _hermite_coefficients(c0, c1, dc0, dc1, ds)
         self._n = s0.size
-        # per interval, for the scalar path: (s0, ds, x0, y0, x1, y1, psi0, kappa0, half_rate,
-        # c0, c_slope, cos psi0, sin psi0, cos psi1, sin psi1)
+        # per interval, for the scalar path: (s0, ds, x0, y0, x1, y1, psi0, kappa0, psi a2,
+        # psi a3, c0, dc0, cant a2, cant a3, cos psi0, sin psi0, cos psi1, sin psi1)
         self._s0_list = s0.tolist()
         self._rows = list(zip(*(a.tolist() for a in (
-            s0, ds, x0, y0, x1, y1, psi0, kappa0, self._half_rate, c0, self._c_slope,
-            np.cos(psi0), np.sin(psi0), np.cos(psi1), np.sin(psi1)))))
+            s0, ds, x0, y0, x1, y1, psi0, kappa0, self._psi_a2, self._psi_a3, c0, dc0,
+            self._c_a2, self._c_a3, np.cos(psi0), np.sin(psi0), np.cos(psi1), np.sin(psi1)))))
         self._last = (None, None)  # (arc lengths, result) of the last scalar query
 
     def __call__(self, s) -> tuple[np.ndarray, ...]:
@@ -96,9 +113,11 @@ class TrackSampler:
         h10, h11 = t * (1.0 - t) ** 2 * d, t * t * (t - 1.0) * d
         x = h00 * self._x0[j] + h01 * self._x1[j] + h10 * np.cos(psi0) + h11 * np.cos(psi1)
         y = h00 * self._y0[j] + h01 * self._y1[j] + h10 * np.sin(psi0) + h11 * np.sin(psi1)
-        psi = psi0 + u * (self._kappa0[j] + self._half_rate[j] * u)
-        kappa = self._kappa0[j] + 2.0 * self._half_rate[j] * u
-        return x, y, psi, self._c0[j] + self._c_slope[j] * u, kappa, self._c_slope[j]
+        k0, p2, p3 = self._kappa0[j], self._psi_a2[j], self._psi_a3[j]
+        dc0, q2, q3 = self._dc0[j], self._c_a2[j], self._c_a3[j]
+        return (x, y, psi0 + u * (k0 + u * (p2 + u * p3)),
+                self._c0[j] + u * (dc0 + u * (q2 + u * q3)),
+                k0 + u * (2.0 * p2 + 3.0 * u * p3), dc0 + u * (2.0 * q2 + 3.0 * u * q3))
 
     def at(self, s: list[float]) -> list[tuple[float, ...]]:
         """Scalar version of :meth:`__call__` for a few points:
@@ -122,7 +141,7 @@ class TrackSampler:
         out = []
         for si in s:
             j = bisect.bisect_right(s0, si) - 1
-            (a, d, x0, y0, x1, y1, psi0, k0, hr, c0, cs, cp0, sp0, cp1, sp1) = rows[
+            (a, d, x0, y0, x1, y1, psi0, k0, p2, p3, c0, dc0, q2, q3, cp0, sp0, cp1, sp1) = rows[
                 0 if j < 0 else (last if j > last else j)]
             u = si - a
             t = u / d
@@ -131,7 +150,8 @@ class TrackSampler:
             h10, h11 = t * r * r * d, -t2 * r * d
             out.append((h00 * x0 + h01 * x1 + h10 * cp0 + h11 * cp1,
                         h00 * y0 + h01 * y1 + h10 * sp0 + h11 * sp1,
-                        psi0 + u * (k0 + hr * u), c0 + cs * u, k0 + 2.0 * hr * u, cs))
+                        psi0 + u * (k0 + u * (p2 + u * p3)), c0 + u * (dc0 + u * (q2 + u * q3)),
+                        k0 + u * (2.0 * p2 + 3.0 * u * p3), dc0 + u * (2.0 * q2 + 3.0 * u * q3)))
         return out
 
     def _check(self, lo, hi, s) -> None:

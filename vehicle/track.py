@@ -1,7 +1,7 @@
 """Railway track centre-line geometry as a function of arc length s [m].
 
-The track is a chain of segments -- :class:`Straight`, :class:`Transition` (clothoid) and
-:class:`Arc` -- assembled by :class:`TrackGeometry`, which evaluates, vectorised over s:
+The track is a chain of segments -- :class:`Straight`, :class:`Transition` and :class:`Arc` --
+assembled by :class:`TrackGeometry`, which evaluates, vectorised over s:
 
 - ``position_m(s) -> (x, y)`` [m], ``heading_rad(s)`` [rad], ``curvature_per_m(s)`` [1/m],
   ``cant_rad(s)`` [rad], and ``total_length_m`` [m].
@@ -17,11 +17,30 @@ the track plane toward +y (right rail higher), so a normally canted curve has
 tangent (right-handed about x) is ``-cant_rad(s)``; the rail height difference over a rail-centre
 distance b is ``b * sin(cant)``.
 
-Everything is in closed form, exact up to round-off: straights and arcs analytically, clothoids
-(curvature linear in s, possibly starting at non-zero curvature) via Fresnel integrals of the
-spiral they are a piece of. A transition between two nearly equal curvatures is a piece of a
-spiral so far from its inflection point that the Fresnel difference cancels badly; it is then
-integrated by composite Gauss-Legendre quadrature of the same exact integrand (error << 1e-12 m).
+Transitions. Along a transition of length L the curvature and the cant go from the previous
+segment's values (kappa0, c0) to the next one's (kappa1, c1) with one shape function f of
+xi = u / L (u: arc length into the transition), f(0) = 0, f(1) = 1:
+
+    kappa(u) = kappa0 + (kappa1 - kappa0) f(xi),    cant(u) = c0 + (c1 - c0) f(xi),
+
+* ``linear``: f = xi -- a clothoid with a linear cant ramp (the paper's transition). Curvature
+  and cant are continuous, but their slopes jump at both ends: on canted track the rails' roll
+  rate steps from 0 to v (c1 - c0) / L as a wheelset enters the ramp;
+* ``cosine``: f = (1 - cos(pi xi)) / 2 -- slopes 0 at both ends (no step in the roll rate; the
+  roll acceleration steps by v^2 (c1 - c0) pi^2 / (2 L^2));
+* ``bloss``: f = 3 xi^2 - 2 xi^3 (Bloss's transition) -- slopes 0 at both ends as well; its
+  largest slope is 1.5 / L, against pi / (2 L) = 1.57 / L for ``cosine`` and 1 / L for
+  ``linear``.
+
+The heading is the integral of the curvature, theta(u) = theta0 + kappa0 u + (kappa1 - kappa0)
+L F(xi) with F the integral of f (xi^2/2; xi/2 - sin(pi xi)/(2 pi); xi^3 - xi^4/2).
+
+Everything is exact up to round-off: straights and arcs analytically, clothoids (curvature
+linear in s, possibly starting at non-zero curvature) via Fresnel integrals of the spiral they
+are a piece of. A clothoid between two nearly equal curvatures is a piece of a spiral so far from
+its inflection point that the Fresnel difference cancels badly, and the other shapes have no
+closed form: their position is integrated by composite Gauss-Legendre quadrature of the exact
+integrand exp(i theta(u)) (error << 1e-12 m).
 
 s outside [0, total_length_m] raises ValueError (no clamping, no extrapolation).
 """
@@ -34,7 +53,7 @@ from typing import Union
 import numpy as np
 from scipy.special import fresnel
 
-__all__ = ["Straight", "Transition", "Arc", "Segment", "TrackGeometry"]
+__all__ = ["Straight", "Transition", "Arc", "Segment", "TrackGeometry", "TRANSITION_SHAPES"]
 
 
 def _checked_float(owner: str, name: str, value, *, positive: bool) -> float:
@@ -76,20 +95,45 @@ class Straight:
         return 0.0
 
 
+#: transition shapes (see the module docstring and :func:`shape_function`)
+TRANSITION_SHAPES = ("linear", "cosine", "bloss")
+
+
+def shape_function(shape: str, xi):
+    """(f, F, f') of a transition shape at xi = u / L in [0, 1] (arrays or floats): the fraction
+    of the change of curvature and cant reached, its integral over xi, and its slope d f / d xi
+    (module docstring)."""
+    xi = np.asarray(xi, dtype=float)
+    if shape == "linear":
+        return xi, 0.5 * xi * xi, np.ones_like(xi)
+    if shape == "cosine":
+        return (0.5 - 0.5 * np.cos(np.pi * xi), 0.5 * xi - np.sin(np.pi * xi) / (2.0 * np.pi),
+                0.5 * np.pi * np.sin(np.pi * xi))
+    if shape == "bloss":
+        x2 = xi * xi
+        return x2 * (3.0 - 2.0 * xi), x2 * xi * (1.0 - 0.5 * xi), 6.0 * xi * (1.0 - xi)
+    raise ValueError(f"transition shape must be one of {TRANSITION_SHAPES}, got {shape!r}")
+
+
 @dataclass(frozen=True)
 class Transition:
-    """Clothoid transition of ``length_m`` [m] > 0.
+    """Transition of ``length_m`` [m] > 0.
 
-    Curvature and (signed) cant vary linearly in s from the previous segment's values to the next
-    segment's values; a missing neighbour (transition at either end of the track) counts as
-    straight level track. Two transitions may not be adjacent.
+    Curvature and (signed) cant go from the previous segment's values to the next segment's
+    values along ``shape`` (``linear``: a clothoid with a linear cant ramp; ``cosine``;
+    ``bloss``; see the module docstring); a missing neighbour (transition at either end of the
+    track) counts as straight level track. Two transitions may not be adjacent.
     """
 
     length_m: float
+    shape: str = "linear"
 
     def __post_init__(self):
         object.__setattr__(self, "length_m",
                            _checked_float("Transition", "length_m", self.length_m, positive=True))
+        if self.shape not in TRANSITION_SHAPES:
+            raise ValueError(f"Transition: shape must be one of {', '.join(TRANSITION_SHAPES)}, "
+                             f"got {self.shape!r}")
 
 
 @dataclass(frozen=True)
@@ -164,10 +208,14 @@ def _fresnel_offset(kappa0: float, rate: float, u: np.ndarray) -> np.ndarray:
     return a * rotation * ((c1 - c0) + 1j * math.copysign(1.0, rate) * (s1 - s0))
 
 
-def _quadrature_offset(kappa0: float, rate: float, length: float, u: np.ndarray) -> np.ndarray:
-    """Clothoid offset by composite Gauss-Legendre quadrature of exp(i(kappa0 v + rate v^2/2))."""
-    kappa_max = max(abs(kappa0), abs(kappa0 + rate * length))
-    phase_span = (kappa_max + math.sqrt(abs(rate))) * length
+def _quadrature_offset(kappa0: float, dkappa: float, length: float, u: np.ndarray,
+                       shape: str = "linear") -> np.ndarray:
+    """Transition offset by composite Gauss-Legendre quadrature of exp(i phase(v)), phase(v) =
+    kappa0 v + dkappa length F(v / length) (F: the shape's integral, :func:`shape_function`; for
+    ``linear`` kappa0 v + rate v^2 / 2 with rate = dkappa / length)."""
+    kappa_max = max(abs(kappa0), abs(kappa0 + dkappa))  # the shapes are monotonic
+    # the phase's curvature is dkappa f' / length, f' <= pi / 2 for every shape
+    phase_span = (kappa_max + math.sqrt(0.5 * math.pi * abs(dkappa) / length)) * length
     n_panels = max(1, math.ceil(phase_span / _GL_MAX_PANEL_PHASE_RAD))
     frac = ((np.arange(n_panels)[:, None] + 0.5 * (_GL_X + 1.0)) / n_panels).ravel()
     weights = np.tile(0.5 * _GL_W, n_panels) / n_panels
@@ -175,7 +223,8 @@ def _quadrature_offset(kappa0: float, rate: float, length: float, u: np.ndarray)
     for i in range(0, u.size, _GL_CHUNK):
         uc = u[i:i + _GL_CHUNK]
         v = uc[:, None] * frac[None, :]
-        out[i:i + _GL_CHUNK] = uc * (np.exp(1j * (kappa0 * v + 0.5 * rate * v * v)) @ weights)
+        phase = kappa0 * v + dkappa * length * shape_function(shape, v / length)[1]
+        out[i:i + _GL_CHUNK] = uc * (np.exp(1j * phase) @ weights)
     return out
 
 
@@ -184,12 +233,14 @@ def _fresnel_is_accurate(kappa0: float, rate: float, length: float) -> bool:
     return math.sqrt(math.pi / abs(rate)) + kappa_max / abs(rate) <= _FRESNEL_MAX_SCALE_M
 
 
-def _local_offset(kappa0: float, rate: float, length: float, u: np.ndarray) -> np.ndarray:
-    if rate == 0.0:
+def _local_offset(kappa0: float, dkappa: float, length: float, u: np.ndarray,
+                  shape: str = "linear") -> np.ndarray:
+    if dkappa == 0.0:
         return _arc_offset(kappa0, u)
-    if _fresnel_is_accurate(kappa0, rate, length):
+    rate = dkappa / length
+    if shape == "linear" and _fresnel_is_accurate(kappa0, rate, length):
         return _fresnel_offset(kappa0, rate, u)
-    return _quadrature_offset(kappa0, rate, length, u)
+    return _quadrature_offset(kappa0, dkappa, length, u, shape)
 
 
 def _float_out(a: np.ndarray, scalar: bool):
@@ -211,9 +262,10 @@ class TrackGeometry:
     _s0: np.ndarray = field(init=False, repr=False, compare=False)
     _length: np.ndarray = field(init=False, repr=False, compare=False)
     _kappa0: np.ndarray = field(init=False, repr=False, compare=False)
-    _rate: np.ndarray = field(init=False, repr=False, compare=False)
+    _dkappa: np.ndarray = field(init=False, repr=False, compare=False)  # change over the segment
     _cant0: np.ndarray = field(init=False, repr=False, compare=False)
-    _cant_rate: np.ndarray = field(init=False, repr=False, compare=False)
+    _dcant: np.ndarray = field(init=False, repr=False, compare=False)    # change over the segment
+    _shape: tuple = field(init=False, repr=False, compare=False)        # transition shape names
     _xy0: np.ndarray = field(init=False, repr=False, compare=False)   # complex start position
     _theta0: np.ndarray = field(init=False, repr=False, compare=False)
 
@@ -235,31 +287,36 @@ class TrackGeometry:
             return 0.0, 0.0
 
         n = len(segs)
-        tab = {name: np.empty(n) for name in ("s0", "length", "kappa0", "rate", "cant0",
-                                              "cant_rate", "theta0")}
+        tab = {name: np.empty(n) for name in ("s0", "length", "kappa0", "dkappa", "cant0",
+                                              "dcant", "theta0")}
         xy0 = np.empty(n, dtype=complex)
+        shapes = []
         s, xy, theta = 0.0, 0j, 0.0
         for k, seg in enumerate(segs):
             length = seg.length_m
             if isinstance(seg, Transition):
                 (k0, c0), (k1, c1) = ends(k - 1), ends(k + 1)
+                shape = seg.shape
             else:
                 (k0, c0) = (k1, c1) = ends(k)
-            rate = (k1 - k0) / length
-            for name, value in (("s0", s), ("length", length), ("kappa0", k0), ("rate", rate),
-                                ("cant0", c0), ("cant_rate", (c1 - c0) / length),
+                shape = "linear"
+            for name, value in (("s0", s), ("length", length), ("kappa0", k0),
+                                ("dkappa", k1 - k0), ("cant0", c0), ("dcant", c1 - c0),
                                 ("theta0", theta)):
                 tab[name][k] = value
+            shapes.append(shape)
             xy0[k] = xy
-            end = _local_offset(k0, rate, length, np.array([length]))[0]
+            end = _local_offset(k0, k1 - k0, length, np.array([length]), shape)[0]
             xy += np.exp(1j * theta) * end
-            theta += k0 * length + 0.5 * rate * length * length
+            # heading change: kappa0 L + (kappa1 - kappa0) L F(1), F(1) = 1/2 for every shape
+            theta += k0 * length + 0.5 * (k1 - k0) * length
             s += length
         set_ = object.__setattr__
         set_(self, "segments", segs)
         for name, arr in tab.items():
             arr.flags.writeable = False
             set_(self, "_" + name, arr)
+        set_(self, "_shape", tuple(shapes))
         xy0.flags.writeable = False
         set_(self, "_xy0", xy0)
 
@@ -267,13 +324,15 @@ class TrackGeometry:
 
     @classmethod
     def curve_entry(cls, straight_m: float, transition_m: float, radius_m: float, arc_m: float,
-                    cant_rad: float = 0.0, direction: int = +1) -> "TrackGeometry":
-        """Straight [m], clothoid transition [m], circular arc of radius_m [m] and length arc_m [m].
+                    cant_rad: float = 0.0, direction: int = +1,
+                    transition_shape: str = "linear") -> "TrackGeometry":
+        """Straight [m], transition [m], circular arc of radius_m [m] and length arc_m [m].
 
-        cant_rad [rad] is the arc's cant (positive raises the outer rail), ramped linearly from 0
-        over the transition; direction +1 curves left, -1 right. A zero straight_m or
-        transition_m omits that segment. The paper's case (Fig. 9): transition_m=15,
-        radius_m=100, cant_rad=0.
+        cant_rad [rad] is the arc's cant (positive raises the outer rail), reached along the
+        transition like the curvature, by ``transition_shape`` (``linear``: a clothoid with a
+        linear cant ramp; ``cosine``, ``bloss``: see the module docstring); direction +1 curves
+        left, -1 right. A zero straight_m or transition_m omits that segment. The paper's case
+        (Fig. 9): transition_m=15, radius_m=100, cant_rad=0, linear.
         """
         straight_m = _checked_float("curve_entry", "straight_m", straight_m, positive=False)
         transition_m = _checked_float("curve_entry", "transition_m", transition_m,
@@ -285,7 +344,7 @@ class TrackGeometry:
         if straight_m > 0.0:
             segs.append(Straight(straight_m))
         if transition_m > 0.0:
-            segs.append(Transition(transition_m))
+            segs.append(Transition(transition_m, transition_shape))
         _checked_float("curve_entry", "arc_m", arc_m, positive=True)
         # radius_m, cant_rad and direction are checked by Arc, under the same names.
         segs.append(Arc(radius_m=radius_m, length_m=arc_m, direction=direction,
@@ -317,16 +376,41 @@ class TrackGeometry:
         idx = np.searchsorted(self._s0, s_arr, side="right") - 1
         return idx, s_arr - self._s0[idx], s_arr.ndim == 0
 
+    def _shape_at(self, idx: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, ...]:
+        """(f, F, f') of each point's segment shape at xi = u / length (:func:`shape_function`;
+        0 and 1 on straights and arcs, whose changes are 0)."""
+        xi = u / self._length[idx]
+        out = tuple(np.empty(u.shape) for _ in range(3))
+        for shape in set(self._shape[k] for k in np.unique(idx)):
+            mask = np.isin(idx, [k for k, sh in enumerate(self._shape) if sh == shape])
+            for arr, value in zip(out, shape_function(shape, xi[mask])):
+                arr[mask] = value
+        return out
+
+    def segment_values(self, k: int, u) -> tuple[np.ndarray, ...]:
+        """(heading [rad], curvature [1/m], cant [rad], d(cant)/ds [rad/m]) of segment ``k`` at
+        local arc lengths ``u`` [m] in [0, its length]: its own values also at its end, where
+        the next segment may start with others (curvature, cant and their slopes may jump at a
+        join; :class:`~vehicle.guidance.TrackSampler` interpolates each segment on its own)."""
+        u = np.asarray(u, dtype=float)
+        length = self._length[k]
+        f, F, df = shape_function(self._shape[k], u / length)
+        k0, dk, c0, dc = self._kappa0[k], self._dkappa[k], self._cant0[k], self._dcant[k]
+        return (self._theta0[k] + k0 * u + dk * length * F, k0 + dk * f, c0 + dc * f,
+                dc * df / length)
+
     def curvature_per_m(self, s):
         """Signed curvature [1/m] at s [m], positive to the left."""
         idx, u, scalar = self._locate(s)
-        return _float_out(self._kappa0[idx] + self._rate[idx] * u, scalar)
+        f = self._shape_at(idx, u)[0]
+        return _float_out(self._kappa0[idx] + self._dkappa[idx] * f, scalar)
 
     def heading_rad(self, s):
         """Heading [rad] at s [m]: angle of the tangent from +x toward +y, unwrapped."""
         idx, u, scalar = self._locate(s)
-        k0, rate = self._kappa0[idx], self._rate[idx]
-        return _float_out(self._theta0[idx] + u * (k0 + 0.5 * rate * u), scalar)
+        F = self._shape_at(idx, u)[1]
+        return _float_out(self._theta0[idx] + self._kappa0[idx] * u
+                          + self._dkappa[idx] * self._length[idx] * F, scalar)
 
     def cant_rad(self, s):
         """Cant [rad] at s [m], signed like the curvature (positive: right rail higher).
@@ -335,7 +419,14 @@ class TrackGeometry:
         this value.
         """
         idx, u, scalar = self._locate(s)
-        return _float_out(self._cant0[idx] + self._cant_rate[idx] * u, scalar)
+        f = self._shape_at(idx, u)[0]
+        return _float_out(self._cant0[idx] + self._dcant[idx] * f, scalar)
+
+    def cant_slope_per_m(self, s):
+        """d(cant)/ds [rad/m] at s [m] (the rails' roll rate over the running speed)."""
+        idx, u, scalar = self._locate(s)
+        df = self._shape_at(idx, u)[2]
+        return _float_out(self._dcant[idx] * df / self._length[idx], scalar)
 
     def position_m(self, s):
         """Centre-line position (x [m], y [m]) at s [m]."""
@@ -343,6 +434,7 @@ class TrackGeometry:
         xy = np.empty(u.shape, dtype=complex)
         for k in np.unique(idx):
             mask = idx == k
-            d = _local_offset(self._kappa0[k], self._rate[k], self._length[k], u[mask])
+            d = _local_offset(self._kappa0[k], self._dkappa[k], self._length[k], u[mask],
+                              self._shape[k])
             xy[mask] = self._xy0[k] + np.exp(1j * self._theta0[k]) * d
         return _float_out(xy.real, scalar), _float_out(xy.imag, scalar)
