@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from vehicle.car import WHEELS, MetroCar
+from vehicle.car import WHEELS, Derailed, MetroCar
 from vehicle.params import ContactParams, VehicleParams
 from vehicle.track import TrackGeometry
 from vehicle.wheelrail.derive_table import derive_default
@@ -268,8 +268,13 @@ def test_lateral_alignment_irregularity_is_followed():
 
 def test_vertical_irregularity_changes_the_wheel_loads_in_both_modes():
     """A vertical level sine (1 mm, 10 m) under the car at 10 m/s (faded in): the wheel loads
-    vary, by the same amount with both guidances (the same Hertz law vertically; the contact
-    spacing and normal direction differ slightly: 2 %; measured equal to 1 N)."""
+    vary, and the car's total vertical wheel-rail force varies by the same amount with both
+    guidances (the same Hertz law vertically; the contact spacing and normal direction differ
+    slightly: 2 %; measured equal to 0.3 N of 7.9 kN). Per wheelset the loads differ by up to
+    ~20 %: the 1 Hz excitation meets the bogies' pitch, which the kinematic car's guidance
+    joints stiffen (they hold each wheelset at its arc length, so bogie pitch stretches the
+    primary suspension longitudinally), while with contact guidance the wheelsets are free
+    along the track, held by their creep forces."""
     amp, wavelength, fade, s_start = 0.001, 10.0, 10.0, 12.0
 
     def irregularity(s):
@@ -278,20 +283,25 @@ def test_vertical_irregularity_changes_the_wheel_loads_in_both_modes():
         zero = np.zeros_like(s)
         return zero, amp * ramp * np.sin(2.0 * math.pi * (s - s_start) / wavelength), zero, zero
 
-    spread = {}
+    spread, total = {}, {}
     for guidance in ("kinematic", "contact"):
         car = MetroCar(P, speed_m_per_s=10.0, guidance=guidance, irregularity=irregularity)
         Q = np.array(run(car, 4.0, lambda c: c.wheel_loads_N()))
-        spread[guidance] = np.ptp(Q[len(Q) // 2:], axis=0)
-    assert np.all(spread["kinematic"] > 500.0)
-    assert np.allclose(spread["contact"], spread["kinematic"], rtol=0.02)
+        Q = Q[len(Q) // 2:]
+        spread[guidance] = np.ptp(Q, axis=0)
+        total[guidance] = np.ptp(Q.sum(axis=1))
+    assert np.all(spread["kinematic"] > 500.0) and np.all(spread["contact"] > 500.0)
+    assert total["contact"] == pytest.approx(total["kinematic"], rel=0.02)
 
 
 def test_a_derailing_wheelset_stops_the_run():
-    """A lateral force of 150 kN on the carbody (6 m/s^2 on the whole car, far beyond Nadal's
-    limit) pushes the wheelsets over the flange: the run stops with an error naming the
-    positions once a wheelset leaves the contact table (+-12 mm) instead of extrapolating it."""
+    """A lateral force of 150 kN on the carbody (6 m/s^2 on the whole car, beyond its
+    overturning limit, ~4.9 m/s^2 for a rigid car with its centre of gravity 1.5 m above rails
+    0.75 m either side) drives the wheelsets onto their flanges and tips the car over: the
+    run stops with a ``Derailed`` error once a wheelset leaves the contact table (+-12 mm) or
+    has no wheel in contact when the solver gives up, instead of extrapolating the table or
+    reporting a numerical failure."""
     car = MetroCar(P, speed_m_per_s=5.0, guidance="contact", carbody_load=True)
     car.set_carbody_load(force_N=(0.0, 150e3, 0.0))
-    with pytest.raises(RuntimeError, match="left the contact table"):
+    with pytest.raises(Derailed, match="left the contact table|off the rails"):
         run(car, 2.0)

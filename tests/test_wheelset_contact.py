@@ -48,7 +48,7 @@ def _random_states(lt, n, seed, scale=1.0):
         yaw=rng.normal(0, 1e-3 * scale, n), y_t=rng.normal(0, 1e-2 * scale * V, n),
         z_t=rng.normal(0, 1e-3, n), roll_t=rng.normal(0, 1e-3, n),
         yaw_t=rng.normal(0, 1e-2 * scale, n),
-        spin_t=V / lt.table.r0 * (1 + rng.normal(0, 2e-3 * scale, n)))
+        spin_t=V / lt.table.r0 * (1 + rng.normal(0, 2e-3 * scale, n)), x_t=np.zeros(n))
     return st, geo, V
 
 

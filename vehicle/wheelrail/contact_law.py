@@ -41,12 +41,12 @@ contact position yc (track frame), and the wheelset's rigid-contact roll0 and ri
 * **Creepages** (:func:`vehicle.wheelrail.creep.creepages` extended to the curve; relative
   velocity of wheel to rail at the contact over V)::
 
-      xi_x = (V (1 - kappa yc) - l yaw_t - spin_t r) / V
+      xi_x = (V (1 - kappa yc) + x_t - l yaw_t - spin_t r) / V
       xi_y = (y_t + r roll_t - V yaw) / (V cos gamma)
       phi  = ((yaw_t + kappa V) cos gamma -+ spin_t sin gamma) / V     (- left, + right)
 
-  (the rail under a contact at yc runs at V (1 - kappa yc) in the turning frame; the absolute yaw
-  rate is yaw_t + kappa V).
+  (the rail under a contact at yc runs at V (1 - kappa yc) in the turning frame, the wheelset
+  centre at V + x_t; the absolute yaw rate is yaw_t + kappa V).
 * **Creep forces**: Kalker's linear theory, coefficients ``f11 = G a b C11``,
   ``f22 = G a b C22``, ``f23 = G (ab)^1.5 C23``, ``f33 = G (ab)^2 C33`` with the Hertz ellipse
   (a, b) of the contact's curvatures (table columns ``kw``, ``kr``, and cos(delta)/r along the
@@ -152,7 +152,9 @@ class WheelsetParams:
 
 
 class WheelsetState(NamedTuple):
-    """Wheelset coordinates in the track frame and their rates (see the module docstring)."""
+    """Wheelset coordinates in the track frame and their rates (see the module docstring);
+    ``x_t``: the centre's longitudinal velocity relative to the frame (0 for a wheelset held at
+    the frame's arc length)."""
 
     y: object
     z: object
@@ -163,6 +165,7 @@ class WheelsetState(NamedTuple):
     roll_t: object
     yaw_t: object
     spin_t: object
+    x_t: object = 0.0
 
 
 # ----------------------------------------------------------------------------- ops
@@ -381,7 +384,7 @@ def contact(ops, s, st, g, V, kappa, c, inv_V):
     [1/m], ``c`` the :class:`LawConstants`, ``inv_V`` 1 / the speed the creepages are divided
     by (see :func:`wheel_contact`). Compiled into the car's kernels
     (:mod:`vehicle.wheelrail.compiled`)."""
-    y, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin_t = st
+    y, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin_t, x_t = st
     c0 = ops.const(0.0)
     c3 = ops.const(3.0)
     r, gam, yc = g.r, g.gamma, g.yc
@@ -403,7 +406,7 @@ def contact(ops, s, st, g, V, kappa, c, inv_V):
     f11, f22 = g.k11 * ab, g.k22 * ab
     f23, f33 = g.k23 * load, g.k33 * ops.pow(load, 4.0 / 3.0)
     # --- creepages ---
-    xi_x = (V * (1.0 - kappa * yc) - lever * yaw_t - spin_t * r) * inv_V
+    xi_x = (V * (1.0 - kappa * yc) + x_t - lever * yaw_t - spin_t * r) * inv_V
     xi_y = (y_t + r * roll_t - V * yaw) * inv_V / cg
     phi = ((yaw_t + kappa * V) * cg - s * spin_t * sg) * inv_V
     # --- Kalker linear + Shen-Hedrick-Elkins ---

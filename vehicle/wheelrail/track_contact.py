@@ -138,13 +138,32 @@ class _Setup(NamedTuple):
     inv_V: float  # 1 / max(V, V_min)
     r0: float  # centre height of the centred rigid contact, m
     spin_inertia: float  # kg m^2
+    track_preload: float  # flexible track: the support's force at rest, N (see _track_forces)
 
 
 @jitable
 def _unpacked_setup(row) -> _Setup:
     """The :class:`_Setup` of its values in a flat array (kernels take arrays: numba checks
     their types at every call much faster than those of tuples)."""
-    return _Setup(LawConstants(row[0], row[1], row[2], row[3]), row[4], row[5], row[6], row[7])
+    return _Setup(LawConstants(row[0], row[1], row[2], row[3]), row[4], row[5], row[6], row[7],
+                  row[8])
+
+
+@jitable
+def _moved(fr, y, z, roll, y_t, z_t, roll_t) -> _Frame:
+    """Frame ``fr`` with the flexible track's displacement under the wheelset (lateral y along
+    the frame's l, vertical z, roll about its tangent t through its origin, and their rates):
+    the track moves like an irregularity of both rails does (module docstring)."""
+    c, s = math.cos(roll), math.sin(roll)
+    l0, l1, l2 = fr.l
+    n0, n1, n2 = fr.n
+    w0, w1, w2 = fr.w
+    (eL, eLt), (eR, eRt) = fr.rails
+    return _Frame(fr.ox, fr.oy, fr.oz + z, fr.oz_t + z_t, fr.t,
+                  (c * l0 + s * n0, c * l1 + s * n1, c * l2 + s * n2),
+                  (c * n0 - s * l0, c * n1 - s * l1, c * n2 - s * l2),
+                  (w0 + roll_t, c * w1 + s * w2, c * w2 - s * w1), fr.kappa,
+                  ((eL + y, eLt + y_t), (eR + y, eRt + y_t)))
 
 
 #: the per-wheel columns of the kernels' table, in WheelGeometry's order (then roll0, dz0)
@@ -169,13 +188,13 @@ def _lookup(table, side, y) -> WheelGeometry:
 
 
 @jitable
-def _wheel(ops, table, su, side, fr, ry, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin):
+def _wheel(ops, table, su, side, fr, ry, z, roll, yaw, x_t, y_t, z_t, roll_t, yaw_t, spin):
     """One wheel (side 0 left, 1 right) of a wheelset at its pose in the track frame: its
     :class:`WheelContact`, and the contact's force and moment about the wheelset centre in the
     track frame."""
     e, e_t = fr.rails[side]
     ys = ry - e
-    st = WheelsetState(ys, z, roll, yaw, y_t - e_t, z_t, roll_t, yaw_t, spin)
+    st = WheelsetState(ys, z, roll, yaw, y_t - e_t, z_t, roll_t, yaw_t, spin, x_t)
     wc = contact(ops, 1.0 - 2.0 * side, st, _lookup(table, side, ys), su.V, fr.kappa, su.law,
                  su.inv_V)
     F, M = force_and_moment(ops, wc, yaw)
@@ -184,9 +203,13 @@ def _wheel(ops, table, su, side, fr, ry, z, roll, yaw, y_t, z_t, roll_t, yaw_t, 
 
 @jitable
 def _wheelset(ops, table, su, ref, fr, q, qt):
-    """One wheelset: (generalized forces (7) on its coordinates ``q``, ``qt`` (7 each), the
-    two wheels' (contact, track-frame force), and its pose (lateral y, yaw) in the track
-    frame)."""
+    """One wheelset: (generalized forces on its coordinates ``q``, ``qt`` (7 each, or 10 on a
+    flexible track: the track's lateral, vertical and roll displacement under it last), the two
+    wheels' (contact, track-frame force), and its pose (lateral y, yaw, mean lateral rail
+    offset) in the track frame)."""
+    flexible = len(q) == 10
+    if flexible:
+        fr = _moved(fr, q[7], q[8], q[9], qt[7], qt[8], qt[9])
     a, b, c = q[3], q[4], q[5]
     ca, sa, cb, sb, cc, sc = ops.cos(a), ops.sin(a), ops.cos(b), ops.sin(b), ops.cos(c), \
         ops.sin(c)
@@ -206,6 +229,7 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
     rz = nx * dx + ny * dy + nz * dz
     vx, vy, vz = qt[0], qt[1], qt[2] - fr.oz_t
     # rates relative to the moving, turning frame: R^T (v - V t - oz' e_z) - W x r
+    x_t = tx * vx + ty * vy - su.V - (W1 * rz - W2 * ry)
     y_t = lx * vx + ly * vy + lz * vz - (W2 * rx - W0 * rz)
     z_t = nx * vx + ny * vy + nz * vz - (W0 * ry - W1 * rx)
     roll = ops.atan2(-(lx * azx + ly * azy + lz * azz), nx * azx + ny * azy + nz * azz)
@@ -214,8 +238,10 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
     yaw_t = nx * wx + ny * wy + nz * wz - W2
     spin = qt[6]
     z = rz - su.r0
-    wl, Fl, Ml = _wheel(ops, table, su, 0, fr, ry, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin)
-    wr, Fr, Mr = _wheel(ops, table, su, 1, fr, ry, z, roll, yaw, y_t, z_t, roll_t, yaw_t, spin)
+    wl, Fl, Ml = _wheel(ops, table, su, 0, fr, ry, z, roll, yaw, x_t, y_t, z_t, roll_t, yaw_t,
+                        spin)
+    wr, Fr, Mr = _wheel(ops, table, su, 1, fr, ry, z, roll, yaw, x_t, y_t, z_t, roll_t, yaw_t,
+                        spin)
     F0, F1, F2 = Fl[0] + Fr[0], Fl[1] + Fr[1], Fl[2] + Fr[2]
     M0, M1, M2 = Ml[0] + Mr[0], Ml[1] + Mr[1], Ml[2] + Mr[2]
     # to global axes (track frame columns t, l, n)
@@ -227,8 +253,11 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
     Mby = Mgy - m_spin * ayy + gyro * (ayz * wx - ayx * wz)
     Mbz = Mgz - m_spin * ayz + gyro * (ayx * wy - ayy * wx)
     Q = (Fgx, Fgy, Fgz, Mbx, ca * Mby + sa * Mbz, sb * Mbx - sa * cb * Mby + ca * cb * Mbz,
-         m_spin)
-    return Q, ((wl, Fl), (wr, Fr)), (ry, yaw)
+         m_spin, 0.0, 0.0, 0.0)
+    if flexible:  # the rails get the opposite of the contact forces (module docstring)
+        Q = Q[:7] + (-F1, su.track_preload - Fgz, -(M0 + ry * F2 - rz * F1))
+    e_mean = 0.5 * (fr.rails[0][0] + fr.rails[1][0])
+    return Q, ((wl, Fl), (wr, Fr)), (ry, yaw, e_mean)
 
 
 #: the sources of every function the kernels compile (their cache is named by a digest of these)
@@ -237,13 +266,15 @@ _DEPENDS = (__file__, _contact_law.__file__, compiled.__file__, kernel_ops.__fil
 
 @kernel(*_DEPENDS)
 def _forces_kernel(q, qt, refs, frames, ys, values, slopes, setup):
-    """Generalized contact forces of all wheelsets, (7n,)."""
+    """Generalized contact forces of all wheelsets, (m n,), m = 7 or 10 coordinates each."""
     ops, table, su = kernel_ops, (ys, values, slopes), _unpacked_setup(setup)
-    out = np.empty(7 * refs.shape[0])
-    for i in range(refs.shape[0]):
-        k = 7 * i
-        Q = _wheelset(ops, table, su, refs[i], _unpacked(frames[i]), q[k:k + 7], qt[k:k + 7])[0]
-        for j in range(7):
+    n = refs.shape[0]
+    m = q.shape[0] // n
+    out = np.empty(m * n)
+    for i in range(n):
+        k = m * i
+        Q = _wheelset(ops, table, su, refs[i], _unpacked(frames[i]), q[k:k + m], qt[k:k + m])[0]
+        for j in range(m):
             out[k + j] = Q[j]
     return out
 
@@ -254,41 +285,45 @@ def _jacobian_kernel(q, qt, refs, frames, ys, values, slopes, setup, factor_q, f
     """factor_q d(-Q)/dq + factor_q_t d(-Q)/dq_t by forward differences, block diagonal."""
     ops, table, su = kernel_ops, (ys, values, slopes), _unpacked_setup(setup)
     n = refs.shape[0]
-    J = np.zeros((7 * n, 7 * n))
+    m = q.shape[0] // n
+    J = np.zeros((m * n, m * n))
     for i in range(n):
-        k = 7 * i
+        k = m * i
         fr = _unpacked(frames[i])
-        qi, vi = q[k:k + 7].copy(), qt[k:k + 7].copy()
+        qi, vi = q[k:k + m].copy(), qt[k:k + m].copy()
         base = _wheelset(ops, table, su, refs[i], fr, qi, vi)[0]
-        for col in range(13):  # 6 positions (the spin angle does not enter), 7 rates
-            qp, vp = qi.copy(), vi.copy()
-            if col < 6:
-                qp[col] += h_q
-                scale = factor_q / h_q
-                j = col
-            else:
-                vp[col - 6] += h_qt
-                scale = factor_q_t / h_qt
-                j = col - 6
-            Qp = _wheelset(ops, table, su, refs[i], fr, qp, vp)[0]
-            for r in range(7):
-                J[k + r, k + j] -= scale * (Qp[r] - base[r])
+        for j in range(m):  # positions: all but the spin angle (nothing depends on it)
+            if j == 6:
+                continue
+            qp = qi.copy()
+            qp[j] += h_q
+            Qp = _wheelset(ops, table, su, refs[i], fr, qp, vi)[0]
+            for r in range(m):
+                J[k + r, k + j] -= factor_q / h_q * (Qp[r] - base[r])
+        for j in range(m):  # rates
+            vp = vi.copy()
+            vp[j] += h_qt
+            Qp = _wheelset(ops, table, su, refs[i], fr, qi, vp)[0]
+            for r in range(m):
+                J[k + r, k + j] -= factor_q_t / h_qt * (Qp[r] - base[r])
     return J
 
 
 @kernel(*_DEPENDS)
 def _outputs_kernel(q, qt, refs, frames, ys, values, slopes, setup):
     """Per wheel (2n): N, the track-frame force (3), the contact angle, eps, the creepages (3);
-    per wheelset (n): lateral y and yaw in the track frame."""
+    per wheelset (n): lateral y and yaw in the track frame, and its rails' mean lateral
+    offset (irregularity and flexible track)."""
     ops, table, su = kernel_ops, (ys, values, slopes), _unpacked_setup(setup)
     n = refs.shape[0]
+    m = q.shape[0] // n
     wheels = np.empty((2 * n, 9))
-    pose = np.empty((n, 2))
+    pose = np.empty((n, 3))
     for i in range(n):
-        k = 7 * i
-        _, ws, (ry, yaw) = _wheelset(ops, table, su, refs[i], _unpacked(frames[i]),
-                                     q[k:k + 7], qt[k:k + 7])
-        pose[i, 0], pose[i, 1] = ry, yaw
+        k = m * i
+        _, ws, (ry, yaw, e_mean) = _wheelset(ops, table, su, refs[i], _unpacked(frames[i]),
+                                             q[k:k + m], qt[k:k + m])
+        pose[i, 0], pose[i, 1], pose[i, 2] = ry, yaw, e_mean
         for side in range(2):
             wc, F = ws[side]
             row = wheels[2 * i + side]
@@ -314,11 +349,17 @@ class WheelsetTrackContact:
         speed_m_per_s: running speed V >= 0 of the track frames.
         min_creep_speed_m_per_s: V_min > 0; creepages are divided by max(V, V_min).
         flange_angle_rad: contact angle above which a wheel counts as in flange contact.
+        track_preload_N: None: rigid track (7 coordinates per wheelset); a number: a flexible
+            track, 10 coordinates per wheelset, the last three the track's lateral, vertical
+            and roll displacement under the wheelset (module docstring), whose support pushes
+            up with this force at rest (the static load of the wheelset on its rails, so that
+            the track starts at rest at 0).
     """
 
     def __init__(self, law_table: ContactLawTable, params: WheelsetParams,
                  reference_positions_m, centre_height_m: float, speed_m_per_s: float,
-                 min_creep_speed_m_per_s: float = 1.0, flange_angle_rad: float = 0.7):
+                 min_creep_speed_m_per_s: float = 1.0, flange_angle_rad: float = 0.7,
+                 track_preload_N: float | None = None):
         if not speed_m_per_s >= 0.0:
             raise ValueError(f"speed_m_per_s must be >= 0 with contact guidance, got "
                              f"{speed_m_per_s!r}")
@@ -338,6 +379,8 @@ class WheelsetTrackContact:
         self.V_ref = max(self.V, float(min_creep_speed_m_per_s))
         self.flange_angle_rad = float(flange_angle_rad)
         self.b = law_table.table.contact_half_spacing
+        #: coordinates per wheelset: 7 (rigid track) or 10 (flexible track)
+        self.m = COORDINATES_PER_WHEELSET + (0 if track_preload_N is None else 3)
         # the kernels' table: per side the columns of WheelGeometry (r .. k33, roll0, dz0)
         idx = [[GEOMETRY_COLUMNS.index(n) for n in
                 [f"{c}_{side}" for c in _WHEEL_COLUMNS] + ["roll0", "dz0"]] for side in _SIDES]
@@ -346,8 +389,8 @@ class WheelsetTrackContact:
                        np.ascontiguousarray(law_table.slopes[idx]))
         # the kernels' constants as a flat array (its _Setup: the property below)
         self._setup_row = np.array([*params.law_constants(self.N_ref), self.V,
-                                    1.0 / self.V_ref, self.r0, params.spin_inertia_kg_m2],
-                                   dtype=float)
+                                    1.0 / self.V_ref, self.r0, params.spin_inertia_kg_m2,
+                                    track_preload_N or 0.0], dtype=float)
         self.set_track([(r[0], 0.0, 0.0, 0.0, 0.0, 0.0) for r in self._ref])
 
     @property
@@ -382,14 +425,15 @@ class WheelsetTrackContact:
     # ------------------------------------------------------------------ interface
     def _args(self, q, q_t) -> tuple:
         q, q_t = np.asarray(q, dtype=float), np.asarray(q_t, dtype=float)
-        if not q.shape == q_t.shape == (7 * self.n,):  # the kernels do not check bounds
-            raise ValueError(f"q and q_t must have {7 * self.n} entries (7 per wheelset), got "
+        m = self.m
+        if not q.shape == q_t.shape == (m * self.n,):  # the kernels do not check bounds
+            raise ValueError(f"q and q_t must have {m * self.n} entries ({m} per wheelset), got "
                              f"{q.shape} and {q_t.shape}")
         return q, q_t, self._ref_arr, self._frame_rows, *self._table, self._setup_row
 
     def forces(self, q, q_t) -> np.ndarray:
-        """Generalized contact forces on all wheelsets' coordinates (7 per wheelset, in the
-        order of the module docstring), (7n,): the compiled kernel
+        """Generalized contact forces on all wheelsets' coordinates (:attr:`m` per wheelset, in
+        the order of the module docstring), (m n,): the compiled kernel
         (:mod:`vehicle.wheelrail.compiled`)."""
         return _forces_kernel(*self._args(q, q_t))
 
@@ -399,7 +443,7 @@ class WheelsetTrackContact:
 
     def jacobian(self, q, q_t, factor_q: float, factor_q_t: float) -> np.ndarray:
         """factor_q d(-Q)/dq + factor_q_t d(-Q)/dq_t (the derivative of the left-hand side,
-        where the contact forces enter with a minus sign), (7n, 7n), block diagonal: forward
+        where the contact forces enter with a minus sign), (m n, m n), block diagonal: forward
         differences of the same law (compiled kernel)."""
         return _jacobian_kernel(*self._args(q, q_t), float(factor_q), float(factor_q_t),
                                 self.FD_STEP_POSITION, self.FD_STEP_RATE)
@@ -407,25 +451,38 @@ class WheelsetTrackContact:
     def outputs(self, q, q_t) -> WheelContactOutputs:
         """The contact state of every wheel and wheelset at the given coordinates."""
         wheels, pose = _outputs_kernel(*self._args(q, q_t))
-        e_mean = np.array([0.5 * (fr.rails[0][0] + fr.rails[1][0]) for fr in self._frames])
         return WheelContactOutputs(wheels[:, 0], wheels[:, 1:4], wheels[:, 4], wheels[:, 5],
-                                   wheels[:, 6:9], pose[:, 0], pose[:, 1], pose[:, 0] - e_mean)
+                                   wheels[:, 6:9], pose[:, 0], pose[:, 1], pose[:, 0] - pose[:, 2])
 
     def in_table(self, lateral_m: Sequence[float]) -> bool:
-        """Whether every wheel's lateral position relative to its rail (wheelset lateral
-        ``lateral_m[i]`` minus the rail offsets of the current step) lies inside the table."""
+        """Whether every wheel's lateral position relative to its rail (``lateral_m[i]``: the
+        wheelset's lateral position relative to its track, :meth:`lateral_positions`, minus the
+        rail offsets of the current step) lies inside the table."""
         lo, hi = self.table.y_range_m
         return all(lo <= yi - fr.rails[s][0] <= hi
                    for yi, fr in zip(lateral_m, self._frames) for s in range(2))
 
-    def lateral_positions(self, q) -> list[float]:
-        """Lateral position of each wheelset centre in its track frame [m] (cheap)."""
+    def longitudinal_offsets(self, q) -> list[float]:
+        """Offset of each wheelset centre along its frame's tangent from the frame's origin [m]
+        (cheap; the frames of the last :meth:`set_track`)."""
         out = []
         for i, (ref, fr) in enumerate(zip(self._ref, self._frames)):
-            k = 7 * i
+            k = self.m * i
+            t = fr.t
+            out.append(t[0] * (ref[0] + q[k] - fr.ox) + t[1] * (ref[1] + q[k + 1] - fr.oy))
+        return out
+
+    def lateral_positions(self, q) -> list[float]:
+        """Lateral position of each wheelset centre in its track frame [m], relative to its
+        flexible track's lateral displacement (cheap; first order in the track's roll)."""
+        out = []
+        m = self.m
+        for i, (ref, fr) in enumerate(zip(self._ref, self._frames)):
+            k = m * i
             l = fr.l
-            out.append(l[0] * (ref[0] + q[k] - fr.ox) + l[1] * (ref[1] + q[k + 1] - fr.oy)
-                       + l[2] * (ref[2] + q[k + 2] - fr.oz))
+            y = (l[0] * (ref[0] + q[k] - fr.ox) + l[1] * (ref[1] + q[k + 1] - fr.oy)
+                 + l[2] * (ref[2] + q[k + 2] - fr.oz))
+            out.append(y - q[k + 7] if m == 10 else y)
         return out
 
     def static_rise_m(self, wheel_load_N: float) -> float:
@@ -440,7 +497,7 @@ class WheelsetTrackContact:
         def vertical(z):
             total = 0.0
             for side in range(2):
-                st = WheelsetState(0.0, z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, spin)
+                st = WheelsetState(0.0, z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, spin, 0.0)
                 wc = contact(SCALAR, 1.0 - 2.0 * side, st, geo[side], su.V, 0.0, su.law,
                              su.inv_V)
                 total += force_and_moment(SCALAR, wc, 0.0)[0][2]
