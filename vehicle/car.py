@@ -68,10 +68,11 @@ on level track.
   table of S1002 on UIC60 1:40 for the car's wheel radius, evaluated per wheel at its lateral
   position relative to its own rail. Each wheelset has a spin coordinate (a one-coordinate node
   with the spin inertia; the wheelset body does not rotate about its axle). The guidance joint
-  keeps only the wheelset's position along the track, s_i(t) = s0_i + v t (the car is *driven
-  by its wheelsets*: the joint's longitudinal reaction at rail level is the traction that keeps
-  the speed), and the body's pitch. Per internal step (PreStep) each wheelset gets its track
-  frame at its own arc length (position, heading, cant, curvature from the
+  keeps only the body's pitch: the wheelsets are free along the track too. The car is *driven
+  at its centre* (:meth:`MetroCar._add_drive`: a joint holds the carbody's position along the
+  track tangent at s_c(t) = s_c0 + v t; its reaction is the force that keeps the speed). Per
+  internal step (PreStep) each wheelset gets its track frame at its own arc length, where it
+  is (position, heading, cant, curvature from the
   :class:`~vehicle.guidance.TrackSampler`; the rail heights and cross-level roll that frame,
   lateral alignment and gauge move each rail).
   The law runs as one force user function for the whole car (one call per residual evaluation)
@@ -128,8 +129,8 @@ When the stored Jacobian is kept, the pre-step function withdraws SolveSteps' re
 (``solver.conv.jacobianUpdateRequested``) so that exudyn does not factorise the unchanged matrix
 again: Newton uses the factorisation it holds (the same LU, bit for bit; ~10 % of a step).
 
-Known limits of the running model (see also :class:`MetroCar`); the first two concern kinematic
-guidance only, the others both (contact guidance prescribes the arc lengths too):
+Known limits of the running model (see also :class:`MetroCar`); all but the third concern
+kinematic guidance only:
 
 * radial wheelsets: the yaw of every wheelset is prescribed to the track heading, so in a curve
   the two wheelsets of a bogie are 2 a / R apart in yaw (0.02 rad at R = 100 m) and the stiff
@@ -146,7 +147,11 @@ guidance only, the others both (contact guidance prescribes the arc lengths too)
   chord apart, shorter than the carbody's 10 m by 10^3 / (24 R^2) (4.2 mm at R = 100 m): stiff
   traction rods take it as an internal longitudinal force (measured 11.4 kN per 10 MN/m rod at
   R = 100 m, wheel loads shifted by up to 0.4 kN, roll unchanged), which real wheelsets,
-  free to roll forward, would not see. It falls with 1/R^2 (0.1 kN at R = 1000 m).
+  free to roll forward, would not see. It falls with 1/R^2 (0.1 kN at R = 1000 m). On canted
+  track the wheelset centres run on a radius smaller by r0 sin(cant) than the rail-level line
+  whose arc lengths are prescribed, and the primary suspensions carry the difference too
+  (+-15 kN between the wheelsets of a bogie at balanced cant on R = 100 m). Contact guidance
+  has neither: its wheelsets are free along the track (:meth:`MetroCar._add_drive`).
 """
 from __future__ import annotations
 
@@ -159,8 +164,9 @@ import numpy as np
 from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
+from .errors import Derailed  # noqa: F401 (re-exported)
 from .guidance import shared_sampler
-from .params import BELLOWS, WHEELS, ContactParams, VehicleParams  # noqa: F401 (re-exported)
+from .params import BELLOWS, WHEELS, ContactParams, TrackStructure, VehicleParams  # noqa: F401 (re-exported)
 from .suspension import (airspring_series_bellow_crushing, airspring_series_force_N,
                          arb_roll_stiffness_N_m_per_rad, bilinear_damper_force_N, maxwell_force_N,
                          maxwell_step)
@@ -169,6 +175,16 @@ from .wheelrail.contact_law import ContactLawTable, WheelsetParams
 from .wheelrail.geometry import ContactTable, table_path
 from .wheelrail.track_contact import WheelContactOutputs, WheelsetTrackContact
 
+
+#: default spectral radius of the implicit integrator (generalized-alpha) at infinite frequency.
+#: A linear cant ramp steps the rails' roll rate and rings each wheelset's ~240 Hz roll on its
+#: contacts (omega h ~ 7.5 at 5 ms): with 0.8 those impacts were integrated unstably on canted
+#: track (balanced and excess cant on the paper's curve diverged, kinematic and contact
+#: guidance); 0.5 damps them within a few steps and runs every case of the cant x speed x radius
+#: x transition matrix (benchmarks/track_matrix.py), while the converged results of the
+#: paper's scenarios move by less than their own discretisation error (docs/models.md,
+#: "Numerical damping").
+SPECTRAL_RADIUS = 0.5
 
 #: exudyn minor version this module was written and measured against (the API changes between
 #: minor versions; tests/test_vehicle.py fails loudly on any other)
@@ -275,8 +291,9 @@ class MetroCar:
         speed_m_per_s: constant running speed v [m/s] (0 = standing); every body starts at v.
         start_s_m: arc length [m] of the car centre (midway between the bogie centres) at
             t = 0. Default: the rear wheelset at s = 0 on a ``track``, 0 without one.
-        spectral_radius: generalized-alpha spectral radius at infinite frequency, 0 < rho <= 1
-            (numerical damping of the ~250 Hz wheelset-on-contact modes).
+        spectral_radius: generalized-alpha spectral radius at infinite frequency, 0 <= rho <= 1
+            (numerical damping of what the step cannot resolve, e.g. the ~240 Hz
+            wheelset-on-contact modes; :data:`SPECTRAL_RADIUS`).
         newton_abs_tol: Newton absolute tolerance on the residual (force scale [N]).
         newton_rel_tol: Newton tolerance relative to the initial residual of the step; None:
             1e-8 with kinematic guidance, :attr:`CONTACT_NEWTON_REL_TOL` with contact guidance.
@@ -329,12 +346,12 @@ class MetroCar:
                  rail_height_m: Callable[[float], np.ndarray] | None = None,
                  step_s: float = 5e-3, *, track: TrackGeometry | None = None,
                  speed_m_per_s: float = 0.0, start_s_m: float | None = None,
-                 spectral_radius: float = 0.8,
+                 spectral_radius: float = SPECTRAL_RADIUS,
                  newton_abs_tol: float = 1e-4, newton_rel_tol: float | None = None,
                  reuse_jacobian: bool = True, carbody_load: bool = False,
                  guidance: str = "kinematic", contact: ContactParams | None = None,
                  irregularity: Callable[[np.ndarray], tuple] | None = None,
-                 wheelset_lateral_offset_m=None):
+                 wheelset_lateral_offset_m=None, track_structure: TrackStructure | None = None):
         if guidance not in ("kinematic", "contact"):
             raise ValueError(f"guidance must be 'kinematic' or 'contact', got {guidance!r}")
         if irregularity is not None and not callable(irregularity):
@@ -349,6 +366,9 @@ class MetroCar:
         if not math.isfinite(speed_m_per_s):
             raise ValueError(f"speed_m_per_s must be finite, got {speed_m_per_s!r}")
         self.params = params
+        #: the track under the rails (:class:`~vehicle.params.TrackStructure`; rigid by default)
+        self.track_structure = track_structure or TrackStructure()
+        self._flexible = self.track_structure.flexible
         self.step_s = float(step_s)
         self._rail_fn = rail_height_m
         p = params
@@ -414,6 +434,9 @@ class MetroCar:
         #: arc length [m] of the car centre at t = 0
         self.start_s_m = start_s
         self._s0_wheelset = start_s + self.wheelset_x_m  # (4,) arc lengths at t = 0
+        # contact guidance: each wheelset's offset along the track from s0 + v t [m] (the
+        # wheelsets are free longitudinally; their track frames follow them, see _pre_step_contact)
+        self._ds_wheelset = np.zeros(4)
         self._x0_m = start_s  # x of the car centre at t = 0 (the track starts at the origin)
         self._sampler = None
         self._canted = False
@@ -462,7 +485,8 @@ class MetroCar:
         def contact_model(z_centre):
             refs = [[float(x) + self._x0_m, 0.0, z_centre] for x in self.wheelset_x_m]
             return WheelsetTrackContact(law, wp, refs, r0, self.speed_m_per_s,
-                                        cp.min_creep_speed_m_per_s, cp.flange_angle_rad)
+                                        cp.min_creep_speed_m_per_s, cp.flange_angle_rad,
+                                        2.0 * self.Q_static_N if self._flexible else None)
 
         # the wheelset centre sits r0 above the rail plane in the rigid centred contact and
         # approaches it by the Hertz deflection under the static wheel load
@@ -488,10 +512,18 @@ class MetroCar:
             return (self.track.total_length_m - self._s0_wheelset[0]) / v
         return -self._s0_wheelset[-1] / v
 
+    def _wheelset_s_m(self, t) -> np.ndarray:
+        """Arc lengths [m] of the wheelsets at time(s) t: s0 + v t, plus each wheelset's own
+        offset along the track with contact guidance (shaped like s0 + v t)."""
+        return self._s0_wheelset + self.speed_m_per_s * t + self._ds_wheelset
+
     def _track_at(self, t: float) -> list[tuple[float, ...]]:
         """Track centre line (x, y, heading, cant, curvature, d(cant)/ds) under each wheelset
-        at time t: 4 tuples."""
-        s = (self._s0_wheelset + self.speed_m_per_s * t).tolist()
+        at time t: 4 tuples (with contact guidance a fifth: under the car centre, where the
+        drive holds the carbody)."""
+        s = self._wheelset_s_m(t).tolist()
+        if self._contact_mode:
+            s.append(self.start_s_m + self.speed_m_per_s * t)
         if self._sampler is None:
             return [(si, 0.0, 0.0, 0.0, 0.0, 0.0) for si in s]
         return self._sampler.at(s)
@@ -524,6 +556,8 @@ class MetroCar:
         for iw in range(4):
             self._add_wheelset_guidance(iw)
             self._add_primary(iw)
+        if self._contact_mode and self._guided:
+            self._add_drive()
         for k in range(4):
             self._add_airspring(k)
         for ib in range(2):
@@ -531,6 +565,8 @@ class MetroCar:
         if self._contact_mode:
             self._add_wheel_rail_contact()
         else:
+            self._track_bodies = [self._add_track_body(iw) for iw in range(4)] \
+                if self._flexible else None
             for j in range(8):
                 self._add_contact(j, rail0[j])
         # optional components (nothing is built when they are off: the same model, bit for bit)
@@ -568,11 +604,10 @@ class MetroCar:
         about t stay free. The joint's lateral reaction acts where the rails apply it, at rail
         level, at every instant: no couple needs adding.
 
-        Contact guidance locks only t . (p - p0) = xi(t) (the position along the track: the
-        wheelsets are driven at the car's speed) and the pitch, t . e_z = 0 (the wheelset body
-        does not spin; its rotation about the axle is a separate coordinate): lateral motion,
-        yaw and roll are left to the wheel-rail contact forces.
-        """
+        Contact guidance locks only the pitch, t . e_z = 0 (the wheelset body does not spin; its
+        rotation about the axle is a separate coordinate): the position along the track, lateral
+        motion, yaw and roll are left to the primary suspension and the wheel-rail contact
+        forces (the car is driven at its centre, :meth:`_add_drive`)."""
         mbs = self.mbs
         xi = esym.Real(f"xi{iw}", 0.0)  # [m]
         eta = esym.Real(f"eta{iw}", 0.0)  # [m]
@@ -585,8 +620,8 @@ class MetroCar:
             return [xi, eta, zero, rx, ry, rz]
 
         pos = [float(self.wheelset_x_m[iw]) + self._x0_m, 0.0, 0.0]
-        # contact guidance: only the position along the track and the pitch stay prescribed
-        axes = [1, 0, 0, 0, 1, 0] if self._contact_mode else [1, 1, 0, 0, 1, 1]
+        # contact guidance: only the pitch stays prescribed (the body does not spin)
+        axes = [0, 0, 0, 0, 1, 0] if self._contact_mode else [1, 1, 0, 0, 1, 1]
         joint = mbs.CreateGenericJoint(itemNumbers=[self._ground, self._wheelsets[iw]],
                                        position=pos, constrainedAxes=axes, show=False)
         if self._guided:
@@ -596,6 +631,40 @@ class MetroCar:
         if iw == 0:
             self._guidance_vars = []
         self._guidance_vars.append((xi, eta, rx, ry, rz))
+
+    def _add_drive(self) -> None:
+        """Contact guidance: the car is driven at its centre. A ``GenericJoint`` between ground
+        and the carbody's centre of gravity locks only its position along the track tangent at
+        the car centre's arc length s_c(t) = start_s + v t, t . (p - p0) = xi_c(t) (the joint
+        frame turns with the heading there, through a symbolic offset user function like the
+        wheelsets' guidance): the carbody is free laterally, vertically and in every rotation,
+        and the wheelsets, each held only in pitch, roll along behind it on their creep forces,
+        where the bogie frames and the primary suspension put them. Its reaction is the force
+        along the track that keeps the speed (the curving resistance of the creep forces),
+        along the tangent at the car centre: no force across the track.
+
+        (Driving each wheelset at its own s_i(t) = s0_i + v t, as an earlier version did,
+        over-constrains the car: on canted track the wheelset centres run on a radius smaller by
+        r0 sin(cant) than the rail-level line whose arc lengths were prescribed, so the two
+        wheelsets of a bogie were held ~0.9 mm too far apart on R = 100 m at balanced cant; the
+        primary suspensions carried +-15 kN between them, and those forces, along tangents up to
+        0.06 rad apart, took ~3 % of M g sin(cant) of the lateral load off the rails.)"""
+        mbs, p = self.mbs, self.params
+        xi = esym.Real("xi_drive", 0.0)  # [m]
+        rz = esym.Real("rz_drive", 0.0)  # heading at the car centre [rad]
+        zero = esym.Real(0.0)
+
+        def offset(mbs, t, itemNumber, offsetUserFunctionParameters):
+            return [xi, zero, zero, zero, zero, rz]
+
+        joint = mbs.CreateGenericJoint(itemNumbers=[self._ground, self._carbody],
+                                       position=[self._x0_m, 0.0, p.carbody_cog_height_m],
+                                       constrainedAxes=[1, 0, 0, 0, 0, 0], show=False)
+        fn = CreateSymbolicUserFunction(mbs, offset, "offsetUserFunction", joint)
+        mbs.SetObjectParameter(joint, "offsetUserFunction", fn)
+        self._sym += [fn, zero]
+        self._drive = joint
+        self._drive_vars = (xi, rz)
 
     def _add_primary(self, iw: int) -> None:
         """Left and right axlebox springs between bogie frame and wheelset ``iw``.
@@ -892,9 +961,11 @@ class MetroCar:
             q = esym.max(C * delta * esym.sqrt(delta) + c * (rv - velocity[2]), zero)
             return [0.0, 0.0, -esym.IfThenElse(delta > 0.0, q, zero)]  # on the wheel: +Q e_z
 
+        # the rail: a point of the ground, or of the wheelset's track body on a flexible track
+        rail = ([self._track_bodies[iw], [0.0, y, 0.0]] if self._flexible else
+                [self._ground, [float(self.wheelset_x_m[iw]) + self._x0_m, y, 0.0]])
         co = self.mbs.CreateCartesianSpringDamper(
-            itemNumbers=[self._ground, self._wheelsets[iw]],
-            localPosition0=[float(self.wheelset_x_m[iw]) + self._x0_m, y, 0.0],
+            itemNumbers=[rail[0], self._wheelsets[iw]], localPosition0=rail[1],
             localPosition1=[0.0, y, -p.wheel_radius_m], show=False)
         fn = CreateSymbolicUserFunction(self.mbs, contact_force, "springForceUserFunction", co)
         self.mbs.SetObjectParameter(co, "springForceUserFunction", fn)
@@ -926,6 +997,11 @@ class MetroCar:
                                                           massMatrix=np.diag([Is] * 4)))
         self._ws_nodes = [mbs.GetObject(b)["nodeNumber"] for b in self._wheelsets]
         nodes = [n for pair in zip(self._ws_nodes, self._spin_nodes) for n in pair]
+        self._track_nodes = []
+        if self._flexible:
+            self._track_nodes = self._add_track_nodes()
+            nodes = [n for trio in zip(self._ws_nodes, self._spin_nodes, self._track_nodes)
+                     for n in trio]
         wr = self._wr
 
         def forces(mbs, t, itemNumber, q, q_t):
@@ -936,6 +1012,58 @@ class MetroCar:
 
         self._wr_object = mbs.AddObject(exu.itemInterface.ObjectGenericODE2(
             nodeNumbers=nodes, forceUserFunction=forces, jacobianUserFunction=jacobian))
+
+    def _add_track_nodes(self) -> list:
+        """Flexible track, contact guidance: per wheelset a node of three coordinates, the
+        track's lateral displacement (along the track plane), vertical displacement and roll
+        about the tangent through the track centre at rail level, under that wheelset, with the
+        track's mass, stiffness and damping to the ground on them (one ``ObjectGenericODE2``;
+        the contact's reaction is in the contact law, :mod:`vehicle.wheelrail.track_contact`).
+        The track mass moves with the wheelset along the track but carries no inertia of that
+        travel: it stands for the rails and sleepers under the wheel at each instant."""
+        mbs, ts = self.mbs, self.track_structure
+        nodes = [mbs.AddNode(exu.itemInterface.NodeGenericODE2(
+            referenceCoordinates=[0.0] * 3, initialCoordinates=[0.0] * 3,
+            initialCoordinates_t=[0.0] * 3, numberOfODE2Coordinates=3)) for _ in range(4)]
+
+        def per_node(values):
+            return np.diag(list(values) * 4)
+
+        mbs.AddObject(exu.itemInterface.ObjectGenericODE2(
+            nodeNumbers=nodes,
+            massMatrix=per_node((ts.mass_kg, ts.mass_kg, ts.roll_inertia_kg_m2)),
+            stiffnessMatrix=per_node((ts.lateral_stiffness_N_per_m, ts.vertical_stiffness_N_per_m,
+                                      ts.roll_stiffness_N_m_per_rad)),
+            dampingMatrix=per_node((ts.lateral_damping_N_s_per_m, ts.vertical_damping_N_s_per_m,
+                                    ts.roll_damping_N_m_s_per_rad))))
+        return nodes
+
+    def _add_track_body(self, iw: int) -> int:
+        """Flexible track, kinematic guidance: the track under wheelset ``iw`` as a body free to
+        move vertically and to roll about its centre at rail level (a ``GenericJoint`` locks the
+        rest), on a vertical spring-damper and a roll spring-damper to the ground; both wheels'
+        vertical contacts act on it (:meth:`_add_contact`), so it carries the wheelset's load
+        and the load difference between its wheels. It stays where the wheelset started: with
+        vertical contact forces only, where it stands does not matter, and it carries no inertia
+        of the wheelset's travel (see :meth:`_add_track_nodes`). The vertical spring's offset
+        carries the static load of the wheelset on its rails: the track starts at rest at 0."""
+        mbs, ts = self.mbs, self.track_structure
+        pos = [float(self.wheelset_x_m[iw]) + self._x0_m, 0.0, 0.0]
+        inertia = ts.roll_inertia_kg_m2
+        body = mbs.CreateRigidBody(
+            inertia=RigidBodyInertia(mass=ts.mass_kg, inertiaTensor=np.diag([inertia] * 3),
+                                     inertiaTensorAtCOM=True),
+            referencePosition=pos, nodeType=exu.NodeType.RotationRxyz)
+        mbs.CreateGenericJoint(itemNumbers=[self._ground, body], position=pos,
+                               constrainedAxes=[1, 1, 0, 0, 1, 1], show=False)
+        K, D = np.zeros((6, 6)), np.zeros((6, 6))
+        K[2, 2], K[3, 3] = ts.vertical_stiffness_N_per_m, ts.roll_stiffness_N_m_per_rad
+        D[2, 2], D[3, 3] = ts.vertical_damping_N_s_per_m, ts.roll_damping_N_m_s_per_rad
+        preload_m = 2.0 * self.Q_static_N / ts.vertical_stiffness_N_per_m
+        mbs.CreateRigidBodySpringDamper(itemNumbers=[self._ground, body], localPosition0=pos,
+                                        localPosition1=[0.0, 0.0, 0.0], stiffness=K, damping=D,
+                                        offset=[0.0, 0.0, preload_m, 0.0, 0.0, 0.0], show=False)
+        return body
 
     def _offset_wheelsets(self, offsets) -> None:
         """Initial lateral displacements of the wheelsets (see ``wheelset_lateral_offset_m``)."""
@@ -956,9 +1084,12 @@ class MetroCar:
         """After Assemble: the object's coordinate indices in the system vectors and the track
         frames at t = 0."""
         idx = []
-        for nb, ns in zip(self._ws_nodes, self._spin_nodes):
+        for i, (nb, ns) in enumerate(zip(self._ws_nodes, self._spin_nodes)):
             i0 = int(self.mbs.GetNodeODE2Index(nb))
             idx += list(range(i0, i0 + 6)) + [int(self.mbs.GetNodeODE2Index(ns))]
+            if self._flexible:
+                it = int(self.mbs.GetNodeODE2Index(self._track_nodes[i]))
+                idx += [it, it + 1, it + 2]
         self._wr_index = np.array(idx)
         self._set_contact_track(0.0)
 
@@ -984,7 +1115,7 @@ class MetroCar:
     def _irregularity_at(self, t) -> tuple[np.ndarray, ...]:
         """(lateral, vertical, cross_level, gauge), each shaped like s = s0 + v t: (4,) under the
         wheelsets at a time t, (n, 4) for times of shape (n, 1)."""
-        s = self._s0_wheelset + self.speed_m_per_s * t
+        s = self._wheelset_s_m(t)
         out = tuple(np.broadcast_to(np.asarray(v, dtype=float), s.shape).astype(float)
                     for v in self._irr(s))
         if len(out) != 4 or not all(np.all(np.isfinite(v)) for v in out):
@@ -1003,7 +1134,8 @@ class MetroCar:
         half a step, a first-order error (the straight irregular run's largest lateral wheel
         force moved 3015 / 2947 / 2921 N at 5 / 2.5 / 1.25 ms with step means, 2926 / 2928 /
         2931 N with the rates at t: car alone, 10 s of scenarios/straight_irregular.yaml)."""
-        state = state or self._track_at(t)
+        state = state or self._track_at(t)[:4]
+        self._frames_t = t
         if self._rail_fn is None and self._irr is None:
             self._wr.set_track(state)
             return
@@ -1015,18 +1147,28 @@ class MetroCar:
         self._wr.set_track(state, rails)
 
     def _pre_step_contact(self, mbs, t: float) -> bool:
-        """PreStep with contact guidance: guidance offsets (position along the track, pitch),
-        track frames and rail offsets at the step end t; stops the integration (advance
-        raises) when a wheelset has left the contact table (derailed)."""
+        """PreStep with contact guidance: guidance offsets (the drive at the car centre, the
+        wheelsets' pitch), track frames and rail offsets at the step end t, each wheelset's at
+        its own arc length; stops the integration (advance raises) when a wheelset has left the
+        contact table (derailed).
+
+        The wheelsets are free along the track: wheelset i's frame is set at s0_i + v t plus its
+        offset along the tangent from its frame at the step start (the state there), so that
+        the law sees the track where the wheelset is. A frame a few millimetres off along a
+        curve would hand the law a spurious angle of attack kappa dx (3e-5 rad for 3 mm at
+        R = 100 m: ~0.2 kN of lateral creep force per wheel)."""
         t0 = mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
+        sd, idx = mbs.systemData, self._wr_index
+        q, q_t = sd.GetODE2Coordinates()[idx], sd.GetODE2Coordinates_t()[idx]
+        if self._guided:  # the offsets at t0 (the frames may be of t0 or, on a retry, of t)
+            self._ds_wheelset = (self._ds_wheelset + np.asarray(self._wr.longitudinal_offsets(q))
+                                 - self.speed_m_per_s * (t0 - self._frames_t))
         state = self._track_at(t)
         if self._guided:
             self._set_guidance(state)
             self._heading_now = state[0][2]
-        self._set_contact_track(t, state)
-        sd, idx = mbs.systemData, self._wr_index
-        y = self._wr.lateral_positions_at_step_end(sd.GetODE2Coordinates()[idx],
-                                                   sd.GetODE2Coordinates_t()[idx], t - t0)
+        self._set_contact_track(t, state[:4])
+        y = self._wr.lateral_positions_at_step_end(q, q_t, t - t0)
         if not self._wr.in_table(y):  # predicted at the step end from the state at its start
             self._wr_left_table = (t0, y)
             return False
@@ -1062,7 +1204,12 @@ class MetroCar:
                 for (x, y, psi, *rest), e in zip(track_state, lat.tolist())]
 
     def _set_guidance(self, track_state) -> None:
-        """Guidance offsets (see :meth:`_add_wheelset_guidance`) for the given track state."""
+        """Guidance offsets (see :meth:`_add_wheelset_guidance`, :meth:`_add_drive`) for the
+        given track state (contact guidance: its fifth entry is the car centre's)."""
+        if self._contact_mode:
+            (xi, rz), (x, y, psi, *_) = self._drive_vars, track_state[4]
+            xi.SetValue(math.cos(psi) * (x - self._x0_m) + math.sin(psi) * y)
+            rz.SetValue(psi)
         for iw, ((xi, eta, rx, ry, rz), (x, y, psi, cant, _, _)) in enumerate(
                 zip(self._guidance_vars, track_state)):
             dx = x - (float(self.wheelset_x_m[iw]) + self._x0_m)
@@ -1222,6 +1369,12 @@ class MetroCar:
         return np.full(4, self._F_static_N)
 
     @property
+    def bellow_height_m(self) -> float:
+        """Nominal height [m] of the airsprings: the distance of their plates at static
+        equilibrium (``airspring_upper_height_m - airspring_lower_height_m``)."""
+        return self._bellow_height_m
+
+    @property
     def t_s(self) -> float:
         """Current simulation time [s]."""
         return self._t
@@ -1344,17 +1497,26 @@ class MetroCar:
             if self._wr_left_table is not None:
                 t_out, y_out = self._wr_left_table
                 lo, hi = self._wr.table.y_range_m
-                raise RuntimeError(
+                raise Derailed(
                     f"a wheelset left the contact table at t = {t_out:.4f} s (derailment or "
                     f"flange climb): lateral positions {np.round(1e3 * np.array(y_out), 2)} mm, "
                     f"the table covers {1e3 * lo:g} .. {1e3 * hi:g} mm relative to the rails")
         if not ok:
-            raise RuntimeError(f"exudyn: time integration failed at t={self._t} s "
-                               f"(advance to {t_end_s} s)")
+            message = f"exudyn: time integration failed at t={self._t} s (advance to {t_end_s} s)"
+            airborne = self._airborne_wheelsets()
+            if airborne:
+                raise Derailed(f"{message} with wheelset(s) {', '.join(map(str, airborne))} off the rails "
+                               f"(no wheel in contact): the car left the track")
+            raise RuntimeError(message)
         self._t = float(t_end_s)
         if self._contact_mode and self._reuse_jacobian and \
                 abs(self._heading_now - self._jac_heading) > self.JACOBIAN_HEADING_TOL_RAD:
             self._refresh_jacobian()  # at the converged state, for the next advance
+
+    def _airborne_wheelsets(self) -> list[int]:
+        """Wheelsets (1..4) with neither wheel in contact at the current state."""
+        Q = self.wheel_loads_N() if not self._contact_mode else self.contact_state().normal_N
+        return [i + 1 for i in range(4) if Q[2 * i] <= 0.0 and Q[2 * i + 1] <= 0.0]
 
     def wheel_loads_N(self) -> np.ndarray:
         """(8,) vertical wheel-rail forces Q >= 0 [N] at the current state, :data:`WHEELS` order.
@@ -1459,6 +1621,42 @@ class MetroCar:
         A = np.asarray(self.mbs.GetObjectOutputBody(self._carbody, _OUT.RotationMatrix))
         A = A.reshape(3, 3)
         return float(math.atan2(A[2, 1], A[2, 2]))
+
+    def track_deflection(self) -> np.ndarray:
+        """(4, 3) per wheelset the flexible track's displacement under it from its position at
+        rest: lateral [m] (in the track plane, + left; 0 with kinematic guidance, which leaves
+        the track laterally rigid), vertical [m] (+ up) and roll [rad] (about the track
+        tangent, + left rail up). Zeros on a rigid track."""
+        out = np.zeros((4, 3))
+        if not self._flexible:
+            return out
+        if self._contact_mode:
+            q = self.mbs.systemData.GetODE2Coordinates()
+            for i, node in enumerate(self._track_nodes):
+                i0 = int(self.mbs.GetNodeODE2Index(node))
+                out[i] = q[i0:i0 + 3]
+            return out
+        body = self.mbs.GetObjectOutputBody
+        for i, b in enumerate(self._track_bodies):
+            out[i, 1] = body(b, _OUT.Displacement)[2]
+            out[i, 2] = body(b, _OUT.Rotation)[0]
+        return out
+
+    def roll_to_track_rad(self) -> np.ndarray:
+        """(3,) roll [rad] of the carbody, the front and the rear bogie frame relative to the
+        track plane (the design track's cant at the car centre and at each bogie centre; the
+        irregularities' cross-level is not subtracted), in :meth:`carbody_roll_rad`'s
+        convention (positive: left side up)."""
+        body = self.mbs.GetObjectOutputBody
+        rolls = []
+        for b in [self._carbody, *self._bogies]:
+            A = np.asarray(body(b, _OUT.RotationMatrix)).reshape(3, 3)
+            rolls.append(math.atan2(A[2, 1], A[2, 2]))
+        if self._sampler is None or not self._canted:
+            return np.array(rolls)
+        s = self.s_m
+        plane = [-row[3] for row in self._sampler.at([s, s + self.bogie_x_m[0], s + self.bogie_x_m[1]])]
+        return np.array(rolls) - np.array(plane)
 
     def carbody_lateral_m(self) -> float:
         """Lateral offset [m] of the carbody centre of gravity from the track centre line,

@@ -281,6 +281,79 @@ class ContactParams:
             raise ValueError(f"flange_angle_rad must lie in (0, pi/2), got {self.flange_angle_rad}")
 
 
+#: track models of :class:`TrackStructure`
+TRACK_MODELS = ("rigid", "flexible")
+
+
+@dataclass(frozen=True)
+class TrackStructure:
+    """The track under the rails. ``rigid``: the rails are where the track geometry and its
+    irregularities put them. ``flexible``: under each wheelset a track mass (the rails and
+    sleepers that move with the wheel) that travels along with the wheelset, on springs and
+    dampers to the ground, lateral (in the track plane), vertical and in roll about the track
+    centre at rail level; the wheel-rail contact acts between wheelset and track mass
+    (:class:`~vehicle.car.MetroCar`). The values are per wheelset (both rails). With kinematic
+    guidance the lateral guidance is prescribed, so only the vertical and roll values enter.
+    Values and sources: :func:`slab_track`."""
+
+    model: str = "rigid"
+    mass_kg: float = 0.0
+    roll_inertia_kg_m2: float = 0.0
+    lateral_stiffness_N_per_m: float = 0.0
+    lateral_damping_N_s_per_m: float = 0.0
+    vertical_stiffness_N_per_m: float = 0.0
+    vertical_damping_N_s_per_m: float = 0.0
+    roll_stiffness_N_m_per_rad: float = 0.0
+    roll_damping_N_m_s_per_rad: float = 0.0
+
+    def __post_init__(self):
+        if self.model not in TRACK_MODELS:
+            raise ValueError(f"model must be one of {', '.join(TRACK_MODELS)}, got {self.model!r}")
+        if self.flexible:
+            for f in dataclasses.fields(self)[1:]:
+                v = getattr(self, f.name)
+                if not (v > 0.0 and math.isfinite(v)):
+                    raise ValueError(f"{f.name} must be finite and > 0 on a flexible track, got {v}")
+
+    @property
+    def flexible(self) -> bool:
+        return self.model == "flexible"
+
+
+def slab_track() -> TrackStructure:
+    """Slab track with rails on resilient fasteners (the usual track of metro tunnels), as one
+    track mass per wheelset: the co-running track benchmark's two layers ("rail - track slab -
+    ground") reduced to one.
+
+    Sources: [Y] Y. Ye, P. Huang, Y. Zhang, Deep learning-based fault diagnostic network of
+    high-speed train secondary suspension systems, Railway Engineering Science 30 (2022) 96-116,
+    Table 2 (a SIMPACK co-running track): fastener stiffness 30 MN/m lateral, 150 MN/m vertical,
+    damping 150 / 100 kN s/m; slab support (cement-asphalt mortar) 70 / 140 MN/m, 350 / 1400
+    kN s/m. [Y] gives no masses; those are from a public implementation of the same benchmark
+    (rail 60 kg per rail, slab 1400 kg and 450 kg m^2 of roll inertia under each wheelset, the
+    support springs 0.75 m either side of the track centre) and are the least certain values.
+
+    Reduction to one mass, per wheelset (both rails): taking every stiffness and damping of [Y]
+    per rail (a fastener under each rail, a support spring under each rail), the fasteners and
+    the support act in series: springs in series (exact for slow loads) and dampers in series
+    (exact for fast ones):
+
+    * mass 1400 + 2 x 60 = 1520 kg; roll inertia 450 + 2 x 60 x 0.75^2 = 517.5 kg m^2;
+    * vertical 1 / (1/(2 x 150) + 1/(2 x 140)) = 144.8 MN/m, 1 / (1/200 + 1/2800) kN s/m
+      = 186.7 kN s/m;
+    * lateral 1 / (1/60 + 1/140) = 42.0 MN/m, 1 / (1/300 + 1/700) = 210 kN s/m;
+    * roll: the per-rail vertical series values at 0.75 m either side, 2 x 0.75^2 x 72.4 MN/m
+      = 81.5 MN m/rad and 2 x 0.75^2 x 93.3 kN s/m = 105 kN m s/rad.
+
+    What the reduction drops: the rails' own modes on the fasteners (60 kg on 150 MN/m,
+    ~250 Hz). The wheelset (800 kg) on this track (1520 kg on 144.8 MN/m) bounces at ~40 Hz,
+    the range of the P2 resonance of metro vehicles."""
+    return TrackStructure(model="flexible", mass_kg=1520.0, roll_inertia_kg_m2=517.5,
+                          lateral_stiffness_N_per_m=42.0e6, lateral_damping_N_s_per_m=210.0e3,
+                          vertical_stiffness_N_per_m=144.8e6, vertical_damping_N_s_per_m=186.7e3,
+                          roll_stiffness_N_m_per_rad=81.5e6, roll_damping_N_m_s_per_rad=105.0e3)
+
+
 def metro_car_arb_dampers() -> VehicleParams:
     """The paper's metro car (the :class:`VehicleParams` defaults) with the secondary components
     an air-sprung metro car usually has: an anti-roll bar per bogie, vertical and lateral
@@ -320,3 +393,7 @@ def metro_car_arb_dampers() -> VehicleParams:
         emergency_spring_stiffness_N_per_m=2.0e6,
         vertical_bumpstop_stiffness_N_per_m=10.0e6,
     )
+
+
+#: track presets: name -> function returning the :class:`TrackStructure`
+TRACK_PRESETS = {"slab_track": slab_track}
