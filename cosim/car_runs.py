@@ -17,6 +17,7 @@ from .criteria import static_wheel_loads, wheel_unloading
 from .experiments import Scenario
 from .interrupts import install_in_worker
 from .master import CoSimulation
+from .watch import StateWatch
 from .plots import Curve, Panel, k_legend
 from .results import Progress, k_label
 from .series import car_dataset, concat_cases
@@ -35,8 +36,9 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
         raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
     x0 = circuit.initial_state(static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa),
                                n_cases=len(k_values))
+    watch = StateWatch(scenario.state_limits, len(k_values), cars[0].bellow_height_m)
     return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling,
-                        case_labels=[f"k = {k_label(k)} W/K" for k in k_values])
+                        case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch)
 
 
 def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:

@@ -18,7 +18,7 @@ from .car_runs import add_wheel_unloading, bellow_panels, of_setting, per_case, 
 from .checks import CaseMetrics
 from .criteria import SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, window_mean
 from .experiments import CurveTest, Scenario
-from .outcome import Outcome, Runner, largest
+from .outcome import Outcome, Runner, largest, warn
 from .plots import Figure, Panel
 from .results import Progress
 from .series import WHEELSETS, with_column
@@ -33,7 +33,7 @@ def make_car(scenario: Scenario) -> MetroCar:
     each worker: the same track in every one)."""
     curve = scenario.curve
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, track=curve.track(),
-                    spectral_radius=scenario.solver.spectral_radius,
+                    spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
                     speed_m_per_s=curve.speed_m_per_s, guidance=curve.guidance,
                     contact=curve.contact_params() if curve.contact else None,
                     irregularity=curve.track_irregularity(scenario.vehicle))
@@ -151,8 +151,23 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
                     sum_y_lim_N=rows[0]["sum_y_lim_N"] if rows else None)
     if curve.irregularity is not None:
         info["irregularity"] = curve.track_irregularity(scenario.vehicle).source
-    return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, [], info,
+    warnings: List[str] = []
+    step = ramp_roll_rate_step_rad_per_s(curve)
+    if step:
+        warn(warnings, f"the linear cant ramp steps the rails' roll rate by {step:.3g} rad/s where a wheelset "
+                       f"enters and leaves it (curve.transition_shape: linear): on a rigid track that rings each "
+                       f"wheelset at ~240 Hz, beyond the step, so sampled peaks there (dqq_max, Y_max_N) depend "
+                       f"on the step; the 2 m means hold better. transition_shape: bloss or cosine has no step")
+    return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, warnings, info,
                    time.perf_counter() - t0)
+
+
+def ramp_roll_rate_step_rad_per_s(curve: CurveTest) -> float:
+    """The step of the rails' roll rate at the ends of a linear cant ramp, v c / L [rad/s] (0 for
+    a smoothed transition, or without cant)."""
+    if curve.transition_shape != "linear" or curve.cant_rad == 0.0:
+        return 0.0
+    return curve.speed_m_per_s * abs(curve.cant_rad) / curve.transition_m
 
 
 def case_metrics(row: Dict[str, object]) -> CaseMetrics:
@@ -205,6 +220,8 @@ def summary_row(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     row["T_bellow_min_K"], row["T_bellow_max_K"] = float(T.min()), float(T.max())
     # closes to the integrator's round-off: air in the chambers changes only by what crosses the boundary
     m = case["total_mass_kg"].values
+    row["air_initial_kg"] = float(m[0])  # the air the circuit holds at the start (verify's floor for air)
+    row["Q0_N"] = float(case["Q0_N"].mean())  # the static wheel load (verify's floor for forces)
     row["mass_balance_error_kg"] = float(m[-1] - m[0] - case["air_from_supply_kg"].values[-1]
                                          + case["air_to_atmosphere_kg"].values[-1])
     row.update(wheel_rail_summary(case, curve))

@@ -18,7 +18,7 @@ from pneumatics.pipe import Pipe
 from pneumatics.rig import bellow_tank_components
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
 from vehicle.irregularities import TrackIrregularity
-from vehicle.params import ContactParams, VehicleParams
+from vehicle.params import ContactParams, TrackStructure, VehicleParams
 from vehicle.track import TRANSITION_SHAPES, TrackGeometry  # noqa: F401 (re-exported)
 
 from .checks import Check
@@ -148,8 +148,13 @@ class TwistTest:
 
 #: default length of the final window the quasi-static end values are averaged over [s]
 DEFAULT_WINDOW_S = 5.0
-#: default spectral radius of the multibody integrator (:class:`SolverSettings`)
-DEFAULT_SPECTRAL_RADIUS = 0.8
+#: the track under the car when a scenario names none (``track:``; vehicle.params.TrackStructure)
+DEFAULT_TRACK_MODEL = "rigid"
+#: the parameters of a flexible track when a scenario names no preset
+DEFAULT_TRACK_PRESET = "slab_track"
+#: default spectral radius of the multibody integrator (:class:`SolverSettings`): the car's own
+#: (vehicle.car.SPECTRAL_RADIUS; written here so that loading a scenario does not import exudyn)
+DEFAULT_SPECTRAL_RADIUS = 0.5
 
 
 def en14363_twist_limit(base_m: float) -> float:
@@ -177,6 +182,43 @@ class SolverSettings:
     output_interval_s: float = 0.02
     jobs: int = 2
     spectral_radius: float = DEFAULT_SPECTRAL_RADIUS
+
+
+@dataclass(frozen=True)
+class StateLimits:
+    """States no car can be in: a case whose state passes one of these stops at the end of that
+    macro-step with a diagnosis (time, body or component, state) and the run exits 1, keeping
+    what it computed (:mod:`cosim.watch`). Each is far beyond what a running car reaches, so
+    that it marks a capsized, derailed or crushed car, not a demanding one:
+
+    * ``carbody_roll_rad``: the carbody rolled relative to the track plane by more than this
+      (0.2 rad: the paper's car rolls 0.03 rad at 1 m/s^2 of unbalanced lateral acceleration;
+      its bellows' plates touch at ~0.17 rad);
+    * ``bogie_roll_rad``: a bogie frame rolled relative to the track plane by more (0.1 rad:
+      40 mm of primary stroke over the 2 m axlebox spacing is 0.04 rad);
+    * ``wheelset_lift_s``: both wheels of a wheelset off their rails (no contact force) for
+      longer than this (0.1 s: 1 m of track at 10 m/s; a wheel unloaded by an impact lifts for
+      milliseconds);
+    * ``bellow_crushing_fraction``: an airspring (bellow and emergency spring) crushed or
+      extended by more than this fraction of its height (1: its plates meet, or it has doubled
+      its height);
+    * ``bellow_volume_fraction``: a bellow crushed to less than this fraction of its nominal
+      volume (0.05: its air compressed twentyfold or more, the bellow crushed flat);
+    * ``T_min_K``, ``T_max_K``, ``p_min_Pa``, ``p_max_Pa``: air in a chamber colder or hotter,
+      or at a lower or higher absolute pressure than this (150 K / 1000 K, 0.1 / 50 bar: air
+      liquefies near 80 K; the ideal gas with constant heat capacities is no longer air far
+      above 1000 K; the car's bellows carry ~4.2 bar).
+    """
+
+    carbody_roll_rad: float = 0.2
+    bogie_roll_rad: float = 0.1
+    wheelset_lift_s: float = 0.1
+    bellow_crushing_fraction: float = 1.0
+    bellow_volume_fraction: float = 0.05
+    T_min_K: float = 150.0
+    T_max_K: float = 1000.0
+    p_min_Pa: float = 1.0e4
+    p_max_Pa: float = 5.0e6
 
 
 @dataclass(frozen=True)
@@ -235,9 +277,11 @@ def _irregularity(spec: IrregularitySpec, track_length_m: float, start_m: float)
 @dataclass(frozen=True)
 class CurveTest:
     """Curve entry (paper §4.2, Fig. 9): straight, transition, circular arc, at constant speed.
-    Along the transition curvature and cant change by ``transition_shape``: ``linear`` (a
-    clothoid with a linear cant ramp, the paper's; the rails' roll rate steps at both ends of a
-    canted ramp), ``cosine`` or ``bloss`` (slopes 0 at both ends: no step); on canted track the
+    Along the transition curvature and cant change by ``transition_shape``: ``bloss`` (the
+    default) or ``cosine`` (slopes 0 at both ends: the rails' roll rate has no step), or
+    ``linear`` (a clothoid with a linear cant ramp, the paper's: the roll rate steps where a
+    wheelset enters and leaves a canted ramp, which rings the wheelsets on a rigid track at
+    ~240 Hz, beyond a 5 ms step: sampled peaks there depend on the step); on canted track the
     transition is a twisted track (vehicle/track.py). The car
     starts at rest relative to the straight (rear wheelset at s = 0), so ``straight_m`` must
     hold the whole car. ``valve_settings``: runs with the levelling and differential valves
@@ -262,7 +306,7 @@ class CurveTest:
     speed_m_per_s: float = 10.0
     straight_m: float = 20.0
     transition_m: float = 15.0
-    transition_shape: str = "linear"
+    transition_shape: str = "bloss"
     radius_m: float = 100.0
     arc_m: float = 300.0
     cant_rad: float = 0.0
@@ -357,8 +401,8 @@ class CarCircuit:
 class Scenario:
     """A validated scenario (built by :func:`cosim.scenario.load_scenario`): where it came from
     (file, content hash, overrides, every file read), its k values, and the typed sections of its
-    kind -- ``rig`` and ``test`` for the rig kinds, ``vehicle``, ``circuit``, ``twist`` or
-    ``curve``, ``solver``, ``verify`` and ``checks`` for the car kinds."""
+    kind -- ``rig`` and ``test`` for the rig kinds, ``vehicle``, ``track``, ``circuit``,
+    ``twist`` or ``curve``, ``solver``, ``verify`` and ``checks`` for the car kinds."""
 
     file: Path
     kind: str
@@ -372,11 +416,15 @@ class Scenario:
     rig: Optional[RigCircuit] = None
     test: Any = None
     vehicle: Optional[VehicleParams] = None
+    #: the track under the rails (car kinds): rigid or flexible
+    track: TrackStructure = TrackStructure()
     circuit: Optional[CarCircuit] = None
     twist: Optional[TwistTest] = None
     curve: Optional[CurveTest] = None
     solver: SolverSettings = SolverSettings()
     verify: VerifySettings = VerifySettings()
+    #: states that stop a case (car kinds: ``state_limits``)
+    state_limits: StateLimits = StateLimits()
     checks: Tuple[Check, ...] = ()
     #: validity flags (:data:`cosim.validity.FLAGS`) that ``check`` accepts instead of failing on
     allow: Tuple[str, ...] = ()

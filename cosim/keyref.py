@@ -16,10 +16,10 @@ from pneumatics.chamber import Bellow, Tank
 from pneumatics.orifice import Orifice
 from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve, SafetyValve
-from vehicle.params import VehicleParams
+from vehicle.params import TrackStructure, VehicleParams
 
-from .experiments import (CurveTest, IrregularitySpec, QuasiStaticTest, RampTest, SineTest, SolverSettings, StiffnessTest, TwistTest,
-                       VerifySettings)
+from .experiments import (CurveTest, IrregularitySpec, QuasiStaticTest, RampTest, SineTest, SolverSettings, StateLimits,
+                          StiffnessTest, TwistTest, VerifySettings)
 from .schema import _type_name
 
 #: (YAML section as written in a scenario, dataclass, note); fields set by the layout (a bellow's
@@ -30,6 +30,9 @@ SECTIONS = (
     ("curve.irregularity", IrregularitySpec, "kind: curve_entry; null = none"),
     ("solver", SolverSettings, "twist and curve_entry"),
     ("verify", VerifySettings, "twist and curve_entry: `pneumorail verify`"),
+    ("state_limits", StateLimits, "twist and curve_entry"),
+    ("track", TrackStructure, "twist and curve_entry: `rigid` (the default), `flexible` (preset `slab_track`), or "
+                              "{model: flexible, preset: slab_track, FIELD: value}"),
     ("test", RampTest, "kind: rig_ramp"),
     ("test", SineTest, "kind: rig_sine"),
     ("test", StiffnessTest, "kind: rig_stiffness"),
@@ -53,9 +56,9 @@ the default shown. Units are in the names (SI: Pa absolute, K, kg, m, s, N, W/K)
 of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is isothermal),
 `checks` (car scenarios: e.g. `dqq_max <= 0.6`, `dqq_max[3R] <= 0.6`, `dqq_max[k=0] <= 0.6`).
 The rig kinds take `circuit: {bellow, tank, pipe, p0_Pa}` and `test`; the car kinds take
-`vehicle`, `circuit` (`layout: four_point | two_point`, `valves`, the sections below, or an
-explicit `components:` mapping of named components with a `type`), `solver`, `verify` and their
-experiment (`twist` or `curve`).
+`vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the sections below, or
+an explicit `components:` mapping of named components with a `type`), `solver`, `verify`,
+`state_limits` and their experiment (`twist` or `curve`).
 """
 
 

@@ -43,8 +43,10 @@ from typing import Callable, Dict, List, Optional, Sequence
 import numpy as np
 
 from pneumatics.circuit import Circuit, CircuitDiverged
+from vehicle.errors import Derailed
 
 from .interrupts import stop_requested
+from .watch import StateWatch
 from pneumatics.integrate import advance, stable_step_s
 
 COUPLINGS = ("linearised", "explicit")
@@ -118,7 +120,8 @@ class CoSimulation:
     """
 
     def __init__(self, cars: Sequence, circuit: Circuit, x0: np.ndarray, macro_step_s: float,
-                 pneumatic_step_s: float, coupling: str = "linearised", case_labels: Optional[Sequence[str]] = None):
+                 pneumatic_step_s: float, coupling: str = "linearised", case_labels: Optional[Sequence[str]] = None,
+                 watch: Optional[StateWatch] = None):
         if coupling not in COUPLINGS:
             raise ValueError(f"coupling must be one of {COUPLINGS}, got {coupling!r}")
         self.cars, self.circuit, self.x = list(cars), circuit, x0.copy()
@@ -134,6 +137,8 @@ class CoSimulation:
         self._F_end = None  # bellow forces the cars feel at the end of the last step (4, cases)
         #: the cars run on the wheel-rail contact: :meth:`sample` records its outputs too
         self.contact = any(getattr(car, "guidance", "kinematic") == "contact" for car in self.cars)
+        #: impossible states that stop a case (None: only divergence does)
+        self.watch = watch
 
     def _crushing(self):
         zs, zds = [], []
@@ -156,11 +161,16 @@ class CoSimulation:
         F_start, K, F_rate, rate = self._force_laws()
         self._advance_cars(F_start, K, F_rate, t1)
         z1, zd1 = self._crushing()
+        if self.watch is not None:                    # before the air sees an impossible crushing
+            self._stop_impossible_cars(z1, t1)
+            z1[:, ~self.active], zd1[:, ~self.active] = self.z[:, ~self.active], 0.0
         motion = hermite_motion(self.t, t1, self.z, self.zd, z1, zd1)
         with np.errstate(all="ignore"):               # a diverging column is diagnosed just below
             # the motion starts at (z_n, zd_n) exactly, so RK4's first stage is ``rate``
             x1 = advance(self.circuit, self.x, self.t, t1, motion, self.h_pneumatic, rate0=rate)
         self._stop_diverged(x1, t1)
+        if self.watch is not None:
+            self._stop_impossible_air(x1, z1, t1)
         x1[:, ~self.active] = self.x[:, ~self.active]  # stopped cases stay frozen
         self._F_end = F_start + self.H * F_rate + K * (z1 - self.z)  # what the cars feel at t1
         self.x, self.t, self.z, self.zd = x1, t1, z1, zd1
@@ -193,6 +203,8 @@ class CoSimulation:
             car.set_bellow_forces(F_start[:, j], K[:, j], F_rate[:, j])
             try:
                 car.advance(t1)
+            except Derailed as exc:                   # a physical end, not a numerical one
+                self._stop(j, f"impossible state: derailed: {exc}")
             except RuntimeError as exc:               # the multibody solver gave up
                 self._stop(j, f"multibody solver failed advancing from t = {self.t:.6g} to {t1:.6g} s: {exc}")
 
@@ -204,6 +216,23 @@ class CoSimulation:
                 self.circuit.check_state(x1[:, j], t1)
             except CircuitDiverged as exc:
                 self._stop(j, str(exc))
+
+    def _stop_impossible_cars(self, z1: np.ndarray, t1: float) -> None:
+        """Stop every running case whose car is in a state no car can be in, or whose bellows
+        are crushed flat (:class:`~cosim.watch.StateWatch`)."""
+        fractions = self.circuit.bellow_volume_fractions(z1)
+        for j in np.flatnonzero(self.active):
+            reason = self.watch.car(j, self.cars[j], t1) or \
+                self.watch.bellows(fractions[:, j], self.circuit.bellow_names, t1)
+            if reason:
+                self._stop(j, f"impossible state: {reason}")
+
+    def _stop_impossible_air(self, x1: np.ndarray, z1: np.ndarray, t1: float) -> None:
+        """Stop every running case whose air left the range of physics."""
+        p, T = self.circuit.chamber_states(x1, z1)
+        for j, reason in enumerate(self.watch.air(p, T, self.circuit.chamber_names, t1)):
+            if reason and self.active[j]:
+                self._stop(j, f"impossible state: {reason}")
 
     def sample(self, record: Record) -> None:
         c = self.circuit

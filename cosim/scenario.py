@@ -29,11 +29,12 @@ from pneumatics.layouts import BELLOWS
 from pneumatics.pipe import Pipe
 from pneumatics.presets import CIRCUIT_PRESETS
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
-from vehicle.params import WHEELS, VehicleParams
+from vehicle.params import TRACK_MODELS, TRACK_PRESETS, WHEELS, TrackStructure, VehicleParams
 
 from .checks import parse_checks
-from .experiments import (CAR_KINDS, KINDS, RIG_KINDS, RIG_TESTS, TRANSITION_SHAPES, CarCircuit, CurveTest, RampTest,
-                          RigCircuit, Scenario, SineTest, SolverSettings, TwistTest, VerifySettings)
+from .experiments import (CAR_KINDS, DEFAULT_TRACK_MODEL, DEFAULT_TRACK_PRESET, KINDS, RIG_KINDS, RIG_TESTS,
+                          TRANSITION_SHAPES, CarCircuit, CurveTest, RampTest, RigCircuit, Scenario, SineTest,
+                          SolverSettings, StateLimits, TwistTest, VerifySettings)
 from .master import COUPLINGS
 from .presets import VEHICLE_PRESETS
 from .schema import MAX_SAMPLES, ScenarioError, build, check_keys, coerce, describe, k_values, require
@@ -104,8 +105,8 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", "test", "allow"), path, [])
     else:
         experiment = "twist" if kind == "twist" else "curve"
-        check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "circuit", experiment, "solver",
-                          "verify", "checks", "allow"), path, [])
+        check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "track", "circuit", experiment,
+                          "solver", "verify", "state_limits", "checks", "allow"), path, [])
     ks = (k_values(list(k_override), path, ["--k"]) if k_override
           else k_values(require(data, "k_W_per_K", path, []), path, ["k_W_per_K"]))
     common = dict(file=path, kind=kind, name=_name(data, path), description=_description(data, path),
@@ -119,6 +120,7 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
 
     vehicle = _vehicle(data.get("vehicle"), path)
     car = _check_car_builds(vehicle, data.get("vehicle"), path)
+    track = _track_structure(data.get("track"), path)
     circuit = _car_circuit(require(data, "circuit", path, [], dict), path)
     solver = build(SolverSettings, data.get("solver"), path, ["solver"])
     if solver.coupling not in COUPLINGS:
@@ -144,10 +146,11 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     _check_steps(solver, duration, path)
     _check_initial_state(circuit, car, ks, valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
+    state_limits = _state_limits(data.get("state_limits"), path)
     checks = parse_checks(data.get("checks", []), kind, path, ks, valve_settings,
                           guidance=tests["curve"].guidance if kind == "curve_entry" else None)
-    return Scenario(**common, files_sha256=_files_read(path, data), vehicle=vehicle, circuit=circuit, solver=solver,
-                    verify=verify, checks=checks, **tests)
+    return Scenario(**common, files_sha256=_files_read(path, data), vehicle=vehicle, track=track, circuit=circuit,
+                    solver=solver, verify=verify, state_limits=state_limits, checks=checks, **tests)
 
 
 def _allow(value, path) -> Tuple[str, ...]:
@@ -662,6 +665,44 @@ def _vehicle(value, file) -> VehicleParams:
         merged = {**defaults, **{k: v for k, v in value.items() if k != "file"}}
         return build(VehicleParams, merged, file, ["vehicle"])
     raise ScenarioError(file, ["vehicle"], f"expected a parameter file path or a mapping, got {describe(value)}")
+
+
+def _state_limits(value, file) -> StateLimits:
+    """``state_limits``: the states that stop a case (:class:`~cosim.experiments.StateLimits`)."""
+    limits = build(StateLimits, value, file, ["state_limits"])
+    for low, high in (("T_min_K", "T_max_K"), ("p_min_Pa", "p_max_Pa")):
+        if not getattr(limits, low) < getattr(limits, high):
+            raise ScenarioError(file, ["state_limits", high], f"must exceed {low} ({getattr(limits, low):g}), "
+                                                              f"got {getattr(limits, high):g}")
+    return limits
+
+
+def _track_structure(value, file) -> TrackStructure:
+    """``track``: absent (:data:`~cosim.experiments.DEFAULT_TRACK_MODEL`), ``rigid``, ``flexible``
+    (the ``slab_track`` preset), or a mapping ``{model: flexible, preset: NAME, <field>:
+    value ...}`` (fields of :class:`~vehicle.params.TrackStructure` on top of the preset)."""
+    if value is None:
+        value = DEFAULT_TRACK_MODEL
+    if isinstance(value, str):
+        value = {"model": value}
+    if not isinstance(value, dict):
+        raise ScenarioError(file, ["track"], f"expected rigid, flexible or a mapping {{model: flexible, ...}}, "
+                                             f"got {describe(value)}")
+    model = value.get("model", "flexible")
+    if model not in TRACK_MODELS:
+        raise ScenarioError(file, ["track", "model"], f"expected one of {', '.join(TRACK_MODELS)}, got {model!r}")
+    fields = {k: v for k, v in value.items() if k not in ("model", "preset")}
+    if model == "rigid":
+        extra = [k for k in value if k != "model"]
+        if extra:
+            raise ScenarioError(file, ["track", extra[0]], "a rigid track takes no parameters (model: flexible does)")
+        return TrackStructure()
+    name = value.get("preset", DEFAULT_TRACK_PRESET)
+    if name not in TRACK_PRESETS:
+        raise ScenarioError(file, ["track", "preset"], f"unknown track preset {name!r} "
+                                                       f"(expected one of {', '.join(TRACK_PRESETS)})")
+    defaults = {k: v for k, v in dataclasses.asdict(TRACK_PRESETS[name]()).items() if k != "model"}
+    return build(TrackStructure, {**defaults, **fields}, file, ["track"], model="flexible")
 
 
 def _check_car_builds(vehicle: VehicleParams, source, file):

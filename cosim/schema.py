@@ -158,6 +158,10 @@ RANGES: Dict[str, Range] = {
     "CurveTest.contact_smoothing_mm": Range(0.0, 1.0, unit="mm",
                                             why="0: the rigid table; 1 mm blurs the flange itself"),
     "SolverSettings.jobs": Range(1, 256, why="worker processes"),
+    "StateLimits.carbody_roll_rad": Range(0.0, 3.2, False, True, "rad", "a roll relative to the track plane"),
+    "StateLimits.bogie_roll_rad": Range(0.0, 3.2, False, True, "rad", "a roll relative to the track plane"),
+    "StateLimits.bellow_crushing_fraction": Range(0.0, 10.0, False, True, why="a fraction of the bellow height"),
+    "StateLimits.bellow_volume_fraction": Range(0.0, 1.0, True, False, why="a fraction of the bellow's volume"),
     "SolverSettings.spectral_radius": Range(0.0, 1.0, unit="",
                                             why="generalized-alpha: 1 damps nothing, 0 the most"),
     "VerifySettings.tolerance": Range(0.0, 1.0, False, False, why="a relative error"),
@@ -190,6 +194,7 @@ POSITIVE_SUFFIXES = tuple(s for s, _ in SUFFIX_RANGES)
 #: Class -> range of every other number of that class.
 CLASS_RANGES: Dict[str, Range] = {
     "VehicleParams": _nonneg(why="a vehicle parameter; 0: the component is absent"),
+    "TrackStructure": _pos(why="a flexible track's mass, stiffness or damping"),
 }
 
 #: ``Class.field`` of list fields -> (must be non-empty, must hold no duplicates).

@@ -80,7 +80,7 @@ def rail_heights(test: TwistTest):
 def make_car(scenario: Scenario) -> MetroCar:
     """The car standing on rails that follow the twist (picklable factory for cosim.car_runs)."""
     return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=scenario.solver.mechanics_step_s,
-                    spectral_radius=scenario.solver.spectral_radius)
+                    spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track)
 
 
 def valve_settings(scenario: Scenario) -> Sequence[Optional[bool]]:

@@ -650,6 +650,22 @@ class Circuit:
         squeeze = (lambda v: v[:, 0]) if x.ndim == 1 else (lambda v: v)
         return CircuitOutputs(*(squeeze(v) for v in (p, T, m, V, w, F)))
 
+    def chamber_states(self, x, z_m) -> tuple[np.ndarray, np.ndarray]:
+        """(absolute pressure [Pa], temperature [K]) of every chamber, each (chambers, cases),
+        at state ``x`` and bellow crushing ``z_m`` (cheap: no flows)."""
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z_m, x2)
+        T = x2[self._s_T]
+        return x2[self._s_m] * self.gas.R_J_per_kgK * T / (self._V0 - self._Ez @ z2), T
+
+    def bellow_volume_fractions(self, z_m) -> np.ndarray:
+        """Volume of each bellow over its nominal volume at crushing ``z_m`` (bellows[, cases])."""
+        z = np.asarray(z_m, dtype=float)
+        idx = self._bellow_chamber
+        z2 = z.reshape(len(idx), -1)
+        V0 = self._V0[idx].reshape(len(idx), 1)
+        return ((V0 - self._Ez[idx] @ z2) / V0).reshape(z.shape)
+
     def bellow_pressures_Pa(self, x2, z2) -> np.ndarray:
         idx = self._bellow_chamber
         lay = self.layout

@@ -15,7 +15,7 @@ from cosim.cli import main
 from cosim.runner import run
 from cosim.scenario import load_scenario
 from cosim.twist import make_car as twist_car
-from cosim.verify import richardson
+from cosim.verify import floor_of, richardson
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 
@@ -106,6 +106,33 @@ def test_richardson_flags_sequences_outside_the_asymptotic_range():
     assert richardson([0.0, 0.0, 0.0]).error == 0.0   # identically zero: converged
     assert richardson([2.0, 2.0, 2.0 * (1 + 1e-12)]).error < 1e-9  # at the noise floor
     assert richardson([1.0, math.nan, 1.0]).error == math.inf
+    # an order far from the schemes' (p = 6 here) marks the range as not asymptotic: the error
+    # is bounded by the spread, not extrapolated
+    f = [1.0 + 0.1 * 64.0 ** -i for i in range(3)]
+    e = richardson(f)
+    assert e.order == pytest.approx(6.0) and not e.asymptotic
+    assert e.error == pytest.approx((abs(f[0] - f[2]) + abs(f[1] - f[2])) / f[2])
+
+
+def test_richardson_judges_a_quantity_near_zero_on_its_floor():
+    """1e-7 kg of air that moves by 30 % between levels: a relative error of ~30 % on its own
+    scale, 3e-5 on a floor of 1 g (the absolute floor of verify's air metrics)."""
+    f = [1.0e-7, 1.3e-7, 1.2e-7]
+    assert richardson(f).error > 0.2
+    assert richardson(f, floor=1e-3).error == pytest.approx((0.2e-7 + 0.1e-7) / 1e-3)
+    # a value above its floor is judged on itself, as without one
+    g = [1.25 + 0.3 * (0.01 / 2 ** i) ** 2 for i in range(3)]
+    assert richardson(g, floor=1e-3).error == richardson(g).error
+
+
+def test_verify_floors_follow_the_metric_unit():
+    row = {"air_initial_kg": "0.9", "roll_max_rad": "0.02", "Q0_N": "29430"}
+    assert floor_of("air_exhausted_kg", row) == pytest.approx(0.9e-3)
+    assert floor_of("roll_mean_end_rad", row) == pytest.approx(2e-3)
+    assert floor_of("sum_y_max_N", row) == pytest.approx(294.3)
+    assert floor_of("dqq_2m_max", row) == pytest.approx(0.01)
+    assert floor_of("dqq_max_3R", {}) == pytest.approx(0.01)   # per-wheel: the family's unit
+    assert floor_of("air_injected_kg", {}) == 0.0              # no reference: no floor
 
 
 # ---------------------------------------------------------------- the verify command

@@ -80,19 +80,21 @@ def test_nadal_and_prudhomme_limits():
 
 
 # ------------------------------------------------------------------------------ physics
-def test_steady_canted_arc_rails_carry_the_unbalanced_centripetal_force(tmp_path):
-    """R = 100 m, 10 m/s, cant 0.03 rad, the car co-simulated with its circuit: once the whole
-    car is in the arc it moves on a circle at constant speed, so the rails' forces in the track
-    plane, summed over the four wheelsets (ΣY; nothing in the model imposes it: it comes from the
-    wheelsets' positions on the contact geometry), carry M (v^2/R cos c - g sin c) = 16.93 kN.
-    Window: the last 6 s (rear wheelset in the arc from t = 3.5 s), ~6 periods of the undamped
-    ~1 Hz carbody sway. Measured +1.6 % (bound 3 %): at R = 100 m the wheelsets' track frames are
-    up to 0.06 rad apart, and the guidance joints that drive the wheelsets along the track (their
-    longitudinal reactions, ~kN per wheelset) have a net component of -220 N across the car;
-    with them, Σ m a of the bodies balances the external forces to 0.04 % (measured on the car
-    alone with the joint reactions, which the co-simulation does not record). Normal to the
-    track plane: 2e-4 (bound 2e-3)."""
-    R, V, cant, T = 100.0, 10.0, 0.03, 12.0
+@pytest.mark.parametrize("cant", [0.03, 0.1016, 0.15])
+def test_steady_canted_arc_rails_carry_the_unbalanced_centripetal_force(tmp_path, cant):
+    """R = 100 m, 10 m/s, the car co-simulated with its circuit: once the whole car is in the
+    arc it moves on a circle at constant speed, so the rails' forces in the track plane, summed
+    over the four wheelsets (ΣY; nothing in the model imposes it: it comes from the wheelsets'
+    positions on the contact geometry), carry M (v^2/R cos c - g sin c): 16.93 kN at cant 0.03,
+    -3 N at the balanced 0.1016, -11.45 kN at 0.15 (excess cant: the car leans on the inner
+    rail). Bound 0.5 % of the larger of M v^2/R and M g sin c (Real track, item 4). Window: the
+    last 6 s (rear wheelset in the arc from t = 3.5 s), ~6 periods of the ~1 Hz carbody sway.
+    Measured within 0.2 %: the car is driven at its centre along the tangent there, the wheelsets
+    free along the track, so nothing but the rails pushes the car across it (when every
+    wheelset was driven at its own arc length, their longitudinal reactions, tens of kN on
+    canted track, took 3 % of M g sin c off the rails). Normal to the track plane: 2e-4 (bound
+    2e-3)."""
+    R, V, T = 100.0, 10.0, 12.0
     s = load(tmp_path, scenario_data(radius_m=R, cant_rad=cant, duration_s=T, arc_m=150.0))
     ds, diagnoses = simulate(s)
     assert not diagnoses
@@ -101,10 +103,13 @@ def test_steady_canted_arc_rails_carry_the_unbalanced_centripetal_force(tmp_path
     window = t >= T - 6.0
     sum_y = case["wheelset_lateral_force_N"].sum("wheelset").values[window].mean()
     expected = P_MASS_KG * (V * V / R * math.cos(cant) - G * math.sin(cant))
-    assert sum_y == pytest.approx(expected, rel=0.03), f"ΣY {sum_y:.1f} N vs {expected:.1f} N"
+    scale = P_MASS_KG * max(V * V / R, G * math.sin(cant))
+    assert sum_y == pytest.approx(expected, abs=0.005 * scale), f"ΣY {sum_y:.1f} N vs {expected:.1f} N"
     # normal to the track plane: the weight's and the centripetal force's components
     sum_q = case["wheel_load_N"].sum("wheel").values[window].mean()
     assert sum_q == pytest.approx(P_MASS_KG * (V * V / R * math.sin(cant) + G * math.cos(cant)), rel=2e-3)
+    if cant != 0.03:
+        return
     # the summary: the leading outer wheel flanges, with the largest Y/Q, below Nadal's limit
     row = summary_row(case, s.curve)
     assert row["yq_lim"] == pytest.approx(1.2003, abs=1e-4)

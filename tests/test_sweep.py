@@ -19,7 +19,8 @@ from cosim.schema import ScenarioError
 
 from helpers import short_twist, write_scenario
 
-#: two twist heights x two bellow volumes; V0 = 0.5 l drives the bellow beyond its stroke: diverges
+#: two twist heights x two bellow volumes; V0 = 0.5 l drives the bellow beyond its stroke: the case
+#: stops (its air leaves the range of physics, or the circuit diverges within the macro-step)
 GRID = {"twist.twist_per_mille": [3, 4], "circuit.bellow.V0_m3": [0.012, 0.0005]}
 
 
@@ -134,7 +135,9 @@ def test_serial_run_records_every_case_and_the_diverged_ones(serial_run):
     assert by[("3", "0.012")]["status"] == by[("4", "0.012")]["status"] == "ok"
     assert float(by[("4", "0.012")]["dqq_max"]) > float(by[("3", "0.012")]["dqq_max"]) > 0.05
     for t in ("3", "4"):                              # diverged: recorded with the diagnosis, the sweep went on
-        assert by[(t, "0.0005")]["status"] == "diverged" and "diverged at t =" in by[(t, "0.0005")]["diagnosis"]
+        diagnosis = by[(t, "0.0005")]["diagnosis"]
+        assert by[(t, "0.0005")]["status"] == "diverged"
+        assert "impossible state" in diagnosis or "diverged at t =" in diagnosis
     for case in outcome.prepared.cases:               # each case keeps its own run folder
         folder = outcome.out / "cases" / case.key
         assert (folder / "summary.csv").exists() and (folder / "run.json").exists() and (folder / "done.json").exists()
@@ -179,12 +182,12 @@ def test_check_evaluates_the_limits_in_every_case_without_rerunning(serial_run, 
     assert rc == 1 and "LIMIT VIOLATED in 3 of 4 cases" in captured.out
     failing = [line for line in captured.out.splitlines() if line.startswith("  ") and "dqq_max <= 0.15" in line]
     assert len(failing) == 3 and not any("twist.twist_per_mille=3, circuit.bellow.V0_m3=0.012:" in f for f in failing)
-    assert any("twist.twist_per_mille=4, circuit.bellow.V0_m3=0.012: dqq_max <= 0.15: 0.17" in f for f in failing)
+    assert any("twist.twist_per_mille=4, circuit.bellow.V0_m3=0.012: dqq_max <= 0.15: 0.16" in f for f in failing)
     if (out / "sweep.nc").exists() or sw._netcdf_engine():
         xr = pytest.importorskip("xarray")
         ds = xr.open_dataset(out / "sweep.nc")
         assert dict(ds.sizes) == {"twist.twist_per_mille": 2, "circuit.bellow.V0_m3": 2, "valves": 1, "k_W_per_K": 1}
-        assert float(ds["dqq_max"].sel({"twist.twist_per_mille": 4, "circuit.bellow.V0_m3": 0.012}).squeeze()) > 0.17
+        assert float(ds["dqq_max"].sel({"twist.twist_per_mille": 4, "circuit.bellow.V0_m3": 0.012}).squeeze()) > 0.15
     assert (out / "sweep_dqq_max_heatmap.png").exists() and (out / "sweep_dqq_max_vs_twist.twist_per_mille.png").exists()
 
 
