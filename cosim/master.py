@@ -137,8 +137,11 @@ class CoSimulation:
         self._F_end = None  # bellow forces the cars feel at the end of the last step (4, cases)
         #: the cars run on the wheel-rail contact: :meth:`sample` records its outputs too
         self.contact = any(getattr(car, "guidance", "kinematic") == "contact" for car in self.cars)
-        #: impossible states that stop a case (None: only divergence does)
+        #: impossible states that stop a case (None: only divergence does): each bellow's volume
+        #: every macro-step, before the air sees it; the rest every StateWatch.INTERVAL_S
         self.watch = watch
+        self._watch_every = max(1, round(StateWatch.INTERVAL_S / macro_step_s))
+        self._steps = 0
 
     def _crushing(self):
         zs, zds = [], []
@@ -161,16 +164,18 @@ class CoSimulation:
         F_start, K, F_rate, rate = self._force_laws()
         self._advance_cars(F_start, K, F_rate, t1)
         z1, zd1 = self._crushing()
+        watching = self.watch is not None and self._steps % self._watch_every == 0
         if self.watch is not None:                    # before the air sees an impossible crushing
-            self._stop_impossible_cars(z1, t1)
+            self._stop_impossible_cars(z1, t1, watching)
             z1[:, ~self.active], zd1[:, ~self.active] = self.z[:, ~self.active], 0.0
         motion = hermite_motion(self.t, t1, self.z, self.zd, z1, zd1)
         with np.errstate(all="ignore"):               # a diverging column is diagnosed just below
             # the motion starts at (z_n, zd_n) exactly, so RK4's first stage is ``rate``
             x1 = advance(self.circuit, self.x, self.t, t1, motion, self.h_pneumatic, rate0=rate)
         self._stop_diverged(x1, t1)
-        if self.watch is not None:
+        if watching:
             self._stop_impossible_air(x1, z1, t1)
+        self._steps += 1
         x1[:, ~self.active] = self.x[:, ~self.active]  # stopped cases stay frozen
         self._F_end = F_start + self.H * F_rate + K * (z1 - self.z)  # what the cars feel at t1
         self.x, self.t, self.z, self.zd = x1, t1, z1, zd1
@@ -217,13 +222,13 @@ class CoSimulation:
             except CircuitDiverged as exc:
                 self._stop(j, str(exc))
 
-    def _stop_impossible_cars(self, z1: np.ndarray, t1: float) -> None:
-        """Stop every running case whose car is in a state no car can be in, or whose bellows
-        are crushed flat (:class:`~cosim.watch.StateWatch`)."""
+    def _stop_impossible_cars(self, z1: np.ndarray, t1: float, cars: bool) -> None:
+        """Stop every running case whose bellows are crushed flat or, with ``cars``, whose car
+        is in a state no car can be in (:class:`~cosim.watch.StateWatch`)."""
         fractions = self.circuit.bellow_volume_fractions(z1)
         for j in np.flatnonzero(self.active):
-            reason = self.watch.car(j, self.cars[j], t1) or \
-                self.watch.bellows(fractions[:, j], self.circuit.bellow_names, t1)
+            reason = self.watch.bellows(fractions[:, j], self.circuit.bellow_names, t1) or \
+                (self.watch.car(j, self.cars[j], t1) if cars else None)
             if reason:
                 self._stop(j, f"impossible state: {reason}")
 

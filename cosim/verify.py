@@ -25,8 +25,9 @@ about the order the schemes have (second order: every coupling and integrator he
 flagged ``asymptotic = False`` only where the observed order says it is not: r <= 1 (the
 differences do not shrink) or p outside [:data:`ORDER_MIN`, :data:`ORDER_MAX`]; its error is
 then bounded by the spread of the levels, |f_0 - f_N| + |f_{N-1} - f_N|, instead of the
-Richardson estimate. Differences at the solvers' noise floor (relative 1e-9 of max(|f|, floor))
-count as converged (no order, asymptotic).
+Richardson estimate. Differences between the levels below 1e-4 of max(|f|, floor)
+(:data:`CONVERGED_BELOW`, 1/50 of the default tolerance) count as converged: no order, no flag,
+the error |f_0 - f_N| / S.
 """
 from __future__ import annotations
 
@@ -40,8 +41,9 @@ from typing import Dict, List, Optional, Sequence, Tuple
 from .results import Progress, atomic_write, jsonable, read_rows, write_rows
 from .experiments import Scenario
 
-#: Relative differences below this are the solvers' noise floor (Newton tolerance, round-off).
-NOISE_FLOOR = 1e-9
+#: Differences between levels below this fraction of the scale S count as converged: they are
+#: 1/50 of the default tolerance, below anything a result is judged by (no order is reported).
+CONVERGED_BELOW = 1e-4
 #: Observed orders outside [ORDER_MIN, ORDER_MAX] mark a metric outside the asymptotic range: the
 #: schemes are second order, and orders of ~1-3 are usual where one error term dominates.
 ORDER_MIN, ORDER_MAX = 0.5, 4.0
@@ -98,14 +100,14 @@ def richardson(values: Sequence[float], metric: str = "", case: str = "", floor:
         return Estimate(metric, case, tuple(f), math.nan, math.nan, math.inf, False)
     scale = max(max(abs(v) for v in f), floor)
     d1, d2 = f[-2] - f[-3], f[-1] - f[-2]
-    noise = NOISE_FLOOR * scale
+    noise = CONVERGED_BELOW * scale
 
     def error(best: float) -> float:
         return abs(f[0] - best) / max(abs(best), floor) if max(abs(best), floor) > 0.0 else 0.0
 
     if scale == 0.0 or (abs(d1) <= noise and abs(d2) <= noise):
         return Estimate(metric, case, tuple(f), math.nan, f[-1], error(f[-1]), True)
-    if abs(d2) > noise and d1 / d2 > 1.0:
+    if d2 != 0.0 and d1 / d2 > 1.0:
         r = d1 / d2
         order, best = math.log2(r), f[-1] + d2 / (r - 1.0)
         if ORDER_MIN <= order <= ORDER_MAX:

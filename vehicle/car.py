@@ -84,7 +84,7 @@ on level track.
   :meth:`MetroCar.flange_contact`, :meth:`MetroCar.contact_state`. Static start: each wheelset
   at the height where the contact carries the static wheel load (no settling transient).
   Standstill: creepages are divided by max(v, ``min_creep_speed_m_per_s`` = 0.01 m/s).
-  Cost (benchmarks/bench_vehicle_curve.py --contact): 1.45 times the kinematic car on the
+  Cost (benchmarks/bench_vehicle_curve.py --contact): 1.57 times the kinematic car on the
   paper's curve entry (docs/wheel_rail.md, "Cost").
 
 Newton's third law in the strong form (moment balance). A force pair between body-fixed points
@@ -1153,16 +1153,19 @@ class MetroCar:
         contact table (derailed).
 
         The wheelsets are free along the track: wheelset i's frame is set at s0_i + v t plus its
-        offset along the tangent from its frame at the step start (the state there), so that
-        the law sees the track where the wheelset is. A frame a few millimetres off along a
+        offset along the tangent, predicted at the step end from the state at its start
+        (position + h velocity), so that the law sees the track where the wheelset is. (Holding
+        the offset of the step start instead lags a step: the R 150 m twisted curve's ΣY then
+        drifted by 22 N, 0.2 %, with every halving of the steps.) A frame a few millimetres off along a
         curve would hand the law a spurious angle of attack kappa dx (3e-5 rad for 3 mm at
         R = 100 m: ~0.2 kN of lateral creep force per wheel)."""
         t0 = mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)
         sd, idx = mbs.systemData, self._wr_index
         q, q_t = sd.GetODE2Coordinates()[idx], sd.GetODE2Coordinates_t()[idx]
-        if self._guided:  # the offsets at t0 (the frames may be of t0 or, on a retry, of t)
-            self._ds_wheelset = (self._ds_wheelset + np.asarray(self._wr.longitudinal_offsets(q))
-                                 - self.speed_m_per_s * (t0 - self._frames_t))
+        if self._guided:  # the offsets predicted at t (the frames may be of t0 or, on a retry, of t)
+            ahead = np.asarray(q) + (t - t0) * np.asarray(q_t)
+            self._ds_wheelset = (self._ds_wheelset + np.asarray(self._wr.longitudinal_offsets(ahead))
+                                 - self.speed_m_per_s * (t - self._frames_t))
         state = self._track_at(t)
         if self._guided:
             self._set_guidance(state)
