@@ -155,8 +155,8 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     step = ramp_roll_rate_step_rad_per_s(curve)
     if step:
         warn(warnings, f"the linear cant ramp steps the rails' roll rate by {step:.3g} rad/s where a wheelset "
-                       f"enters and leaves it (curve.transition_shape: linear): on a rigid track that rings each "
-                       f"wheelset at ~240 Hz, beyond the step, so sampled peaks there (dqq_max, Y_max_N) depend "
+                       f"enters and leaves it (curve.transition_shape: linear): that rings each wheelset on its "
+                       f"contacts (~240 Hz on a rigid track), beyond the step, so sampled peaks there (dqq_max, Y_max_N) depend "
                        f"on the step; the 2 m means hold better. transition_shape: bloss or cosine has no step")
     return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, warnings, info,
                    time.perf_counter() - t0)

@@ -18,7 +18,7 @@ metric's own unit (:data:`FLOORS`), so that a quantity near zero is judged on th
 it is a part of instead of its own: air [kg] on 0.1 % of the air the circuit holds at the start
 (~1 g for the metro car), a roll [rad] on 10 % of the case's largest roll, a force [N] on 1 %
 of the static wheel load, a ratio (ΔQ/Q0, Y/Q) on 0.01. A result of 1e-7 kg of air whose
-relative error is 30 % is then judged as the 3e-11 kg it is of a gram.
+relative error is 30 % is then judged by how much it moves (3e-8 kg) against a gram: 3e-5.
 
 Asymptotic range: the estimate is meaningful when the differences shrink as the steps halve at
 about the order the schemes have (second order: every coupling and integrator here). A metric is
@@ -102,20 +102,21 @@ def richardson(values: Sequence[float], metric: str = "", case: str = "", floor:
     d1, d2 = f[-2] - f[-3], f[-1] - f[-2]
     noise = CONVERGED_BELOW * scale
 
-    def error(best: float) -> float:
-        return abs(f[0] - best) / max(abs(best), floor) if max(abs(best), floor) > 0.0 else 0.0
+    def error(best: float, change: float) -> float:  # change: of level 0 from best
+        S = max(abs(best), floor)
+        return change / S if S > 0.0 else (0.0 if change == 0.0 else math.inf)
 
     if scale == 0.0 or (abs(d1) <= noise and abs(d2) <= noise):
-        return Estimate(metric, case, tuple(f), math.nan, f[-1], error(f[-1]), True)
+        return Estimate(metric, case, tuple(f), math.nan, f[-1], error(f[-1], abs(f[0] - f[-1])), True)
     if d2 != 0.0 and d1 / d2 > 1.0:
         r = d1 / d2
         order, best = math.log2(r), f[-1] + d2 / (r - 1.0)
         if ORDER_MIN <= order <= ORDER_MAX:
-            return Estimate(metric, case, tuple(f), order, best, error(best), True)
+            return Estimate(metric, case, tuple(f), order, best, error(best, abs(f[0] - best)), True)
     else:
-        order, best = math.nan, f[-1]
-    spread = (abs(f[0] - f[-1]) + abs(f[-2] - f[-1])) / max(abs(f[-1]), floor)
-    return Estimate(metric, case, tuple(f), order, best, spread, False)
+        order = math.nan
+    spread = abs(f[0] - f[-1]) + abs(f[-2] - f[-1])
+    return Estimate(metric, case, tuple(f), order, f[-1], error(f[-1], spread), False)
 
 
 def refined(scenario: Scenario, level: int) -> Scenario:
@@ -154,24 +155,18 @@ def floor_of(metric: str, row: Dict[str, str]) -> float:
 def estimates(rows_per_level: Sequence[List[Dict[str, str]]], metrics: Sequence[str]) -> List[Estimate]:
     """Richardson estimates of every metric (present in the rows) of every case."""
     by_level = [{_case(r): r for r in rows} for rows in rows_per_level]
-    out = []
-    for metric in metrics:
-        for case, row in by_level[0].items():
-            if metric not in row:
-                continue
-            values = [float(level[case][metric]) if case in level else math.nan for level in by_level]
-            out.append(richardson(values, metric, case, floor_of(metric, row)))
-    scale: Dict[str, float] = {}
-    for e in out:
-        if math.isfinite(e.richardson):
-            scale[_family(e.metric)] = max(scale.get(_family(e.metric), 0.0), abs(e.richardson))
-    rescaled = []
-    for e in out:
-        s = scale.get(_family(e.metric), 0.0)
-        if _family(e.metric) != e.metric and math.isfinite(e.error) and s > abs(e.richardson):
-            e = dataclasses.replace(e, error=e.error * abs(e.richardson) / s)
-        rescaled.append(e)
-    return rescaled
+    series = [(metric, case, [float(level[case][metric]) if case in level else math.nan for level in by_level],
+               floor_of(metric, row))
+              for metric in metrics for case, row in by_level[0].items() if metric in row]
+    # a per-wheel metric is judged on the scale of its family: the largest |estimate| of that
+    # metric over all wheels and cases, taken as a floor of its own scale
+    family: Dict[str, float] = {}
+    for metric, case, values, floor in series:
+        e = richardson(values, metric, case, floor)
+        if _family(metric) != metric and math.isfinite(e.richardson):
+            family[_family(metric)] = max(family.get(_family(metric), 0.0), abs(e.richardson))
+    return [richardson(values, metric, case, max(floor, family.get(_family(metric), 0.0)))
+            for metric, case, values, floor in series]
 
 
 def verify(scenario: Scenario, out: Path, levels: int, progress: Progress) -> Tuple[List[Estimate], Optional[str]]:

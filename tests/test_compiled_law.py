@@ -285,3 +285,71 @@ def test_wrong_lengths_are_refused_before_the_kernels(contact):
             contact.jacobian(q, bad, 1.0, 1.0)
     with pytest.raises(ValueError, match="need 4 frames"):
         contact.set_track([(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)] * 3)
+
+
+def _rotation(axis, angle):
+    """Rotation matrix about a unit ``axis`` by ``angle`` (Rodrigues)."""
+    k = np.asarray(axis, dtype=float)
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
+
+
+def _tait_bryan(A):
+    """(a, b, c) of A = Rx(a) Ry(b) Rz(c)."""
+    return math.atan2(-A[1, 2], A[2, 2]), math.asin(A[0, 2]), math.atan2(-A[0, 1], A[0, 0])
+
+
+def test_flexible_track_gets_the_opposite_of_the_contact_forces(law):
+    """The track's coordinates carry the reaction of the contact: moving wheelset and track
+    together rigidly (along the track plane's lateral axis, along its normal, or rolling both
+    about the tangent through the track centre) changes no contact force, and the contact's
+    generalized forces do no work in that motion but the support preload's (the pair is
+    internal). Checked on a canted, curved frame with the track displaced and the wheelset yawed,
+    each motion by 1e-7 m or rad; the work is first order in the step, so the
+    residual is ~1e-7 of |F| times it (bound 1e-5)."""
+    preload = 60e3
+    wr = WheelsetTrackContact(law, WheelsetParams(), REFS, R0, V, track_preload_N=preload)
+    wr.set_track([(r[0], 0.0, 0.1, 0.1, 1e-2, 0.0) for r in REFS])
+    fr, ref = wr._frames[0], wr._ref[0]
+    from vehicle.wheelrail.track_contact import _moved
+    q = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2e-4, -1e-4, 3e-4])
+    moved = _moved(fr, *q[7:10], 0.0, 0.0, 0.0)
+    # the wheelset centred on its (displaced) rails, rolled with the track, at the height where
+    # the contact carries ~30 kN a wheel
+    p = (np.array([moved.ox, moved.oy, moved.oz]) + q[7] * np.array(moved.l)
+         + (wr.r0 + wr.static_rise_m(30e3)) * np.array(moved.n))
+    q[:3] = p - np.array(ref)
+    # oriented with the displaced track, yawed 2 mrad on it
+    frame = np.array([moved.t, moved.l, moved.n]).T
+    q[3:6] = _tait_bryan(frame @ _rotation((0, 0, 1), 2e-3))
+    qt = np.array([*(V * np.array(moved.t)), 0.0, 0.0, 0.0, V / R0, 0.0, 0.0, 0.0])
+
+    def evaluate(qq):
+        Q, wheels, _ = _wheelset(SCALAR, wr._table, wr._setup, ref, fr, qq.tolist(), qt.tolist())
+        return np.array(Q), np.array([w[0].N for w in wheels])
+
+    Q0, N0 = evaluate(q)
+    assert 1e4 < N0.max() < 1e5 and Q0[7:].any()
+    origin = np.array([moved.ox, moved.oy, moved.oz])
+    d = 1e-7
+    for axis in ("lateral", "normal", "roll"):
+        qn = q.copy()
+        if axis == "lateral":
+            qn[7] += d
+            qn[:3] += d * np.array(moved.l)
+        elif axis == "normal":
+            qn[8] += d
+            qn[:3] += d * np.array(moved.n)
+        else:
+            qn[9] += d
+            R = _rotation(moved.t, d)
+            p = np.array(ref) + q[:3]
+            qn[:3] = origin + R @ (p - origin) - np.array(ref)
+            A = _rotation((1, 0, 0), q[3]) @ _rotation((0, 1, 0), q[4]) @ _rotation((0, 0, 1), q[5])
+            qn[3:6] = _tait_bryan(R @ A)
+            qn[6] += d * (A[:, 1] @ np.array(moved.t))   # the wheel turns about its axle by its share
+        Qn, Nn = evaluate(qn)
+        assert np.abs(Nn - N0).max() < 1e-6 * N0.max(), axis
+        dq = qn - q
+        work = Q0 @ dq - preload * moved.n[2] * dq[8]
+        assert abs(work) < 1e-5 * np.abs(Q0[:3]).max() * d, (axis, work)

@@ -15,7 +15,7 @@ from cosim.cli import main
 from cosim.runner import run
 from cosim.scenario import load_scenario
 from cosim.twist import make_car as twist_car
-from cosim.verify import floor_of, richardson
+from cosim.verify import estimates, floor_of, richardson
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 
@@ -160,3 +160,16 @@ def test_verify_exit_codes(tmp_path, capsys):
     assert main(["verify", twist, *SHORT_TWIST, "--set", "verify.tolerance=-1", "--out", str(tmp_path / "bad")]) == 2
     assert main(["verify", str(SCENARIOS / "rig_table2.yaml"), "--out", str(tmp_path / "bad")]) == 2
     assert not (tmp_path / "bad").exists()
+
+
+def test_verify_judges_a_wheel_near_zero_on_the_scale_of_the_test():
+    """A wheel whose ΔQ/Q0 is 0.03 at the shipped steps and 1e-4 once refined, beside a wheel at
+    0.40: its level-0 error, 0.03 of 0.40, is 7.5 % (it failed 0.074 % before the scale of the
+    family became a floor of its own); an exactly zero finest level does not divide by zero."""
+    rows = [[{"valves": "False", "k_W_per_K": "0", "dqq_qs_1L": a, "dqq_qs_1R": b}]
+            for a, b in (("0.030", "0.40"), ("0.0003", "0.40"), ("0.0001", "0.40"))]
+    found = {e.metric: e for e in estimates(rows, ("dqq_qs_1L", "dqq_qs_1R"))}
+    assert found["dqq_qs_1L"].error == pytest.approx(0.0299 / 0.40, rel=0.02)
+    for f in ([1e-3, 5e-4, 0.0], [1.0, 1.0, 0.0], [0.0, 1e-3, 0.0]):
+        assert math.isfinite(richardson(f, floor=0.01).error)
+        assert richardson(f).error == math.inf

@@ -290,8 +290,9 @@ class TrackStructure:
     """The track under the rails. ``rigid``: the rails are where the track geometry and its
     irregularities put them. ``flexible``: under each wheelset a track mass (the rails and
     sleepers that move with the wheel) that travels along with the wheelset, on springs and
-    dampers to the ground, lateral (in the track plane), vertical and in roll about the track
-    centre at rail level; the wheel-rail contact acts between wheelset and track mass
+    dampers to the ground, lateral and normal to the track plane (on level track: vertical) and
+    in roll about the track centre at rail level; the wheel-rail contact acts between wheelset
+    and track mass
     (:class:`~vehicle.car.MetroCar`). The values are per wheelset (both rails). With kinematic
     guidance the lateral guidance is prescribed, so only the vertical and roll values enter.
     Values and sources: :func:`slab_track`."""

@@ -13,7 +13,19 @@ Coordinates (per wheelset, 7): the wheelset body's exudyn ``RotationRxyz`` node 
 (displacements ux, uy, uz from its reference position and the Tait-Bryan angles a, b, c of
 A = Rx(a) Ry(b) Rz(c), global axes: x forward at the start, y left, z up) and the spin angle of
 a separate one-coordinate node (rotation about the axle relative to the non-rotating body, > 0
-rolling forward). The body does not spin: its pitch relative to the track is held by the model.
+rolling forward). The body does not spin: its pitch relative to the track is held by the model;
+it is free along the track (its velocity along the tangent relative to the frame, x_t, enters
+the longitudinal creepage).
+
+Flexible track (``track_preload_N`` given; 10 coordinates per wheelset): the last three are the
+track's displacement under the wheelset, lateral y along the track plane's lateral axis, normal
+z along its normal and roll about the tangent through the track centre at rail level, each
+relative to the frame (:func:`_moved`): the track rolls the frame, moves its origin along the
+rolled normal and both rails along the rolled lateral axis, as irregularities move them. The
+rails get the opposite of the contact forces: on y minus the lateral force, on z the support's
+preload (the static load of the wheelset on its rails, along the normal) minus the normal force,
+on the roll minus the contact moment about the tangent through the origin. The track's own
+mass, stiffness and damping are a separate linear object (``vehicle/car.py``).
 
 Track frame of a wheelset (:meth:`WheelsetTrackContact.set_track`, once per time step): origin
 on the track centre line at rail level at the wheelset's arc length, axes R = Rz(psi) Rx(-cant)
@@ -138,7 +150,7 @@ class _Setup(NamedTuple):
     inv_V: float  # 1 / max(V, V_min)
     r0: float  # centre height of the centred rigid contact, m
     spin_inertia: float  # kg m^2
-    track_preload: float  # flexible track: the support's force at rest, N (see _track_forces)
+    track_preload: float  # flexible track: the support's force at rest, N (module docstring)
 
 
 @jitable
@@ -151,17 +163,20 @@ def _unpacked_setup(row) -> _Setup:
 
 @jitable
 def _moved(fr, y, z, roll, y_t, z_t, roll_t) -> _Frame:
-    """Frame ``fr`` with the flexible track's displacement under the wheelset (lateral y along
-    the frame's l, vertical z, roll about its tangent t through its origin, and their rates):
-    the track moves like an irregularity of both rails does (module docstring)."""
+    """Frame ``fr`` with the flexible track's displacement under the wheelset (module
+    docstring): rolled by ``roll`` about its tangent t, its origin moved by ``z`` along the
+    rolled normal n', both rails moved by ``y`` along the rolled lateral axis l' (as an
+    alignment irregularity moves them). y, z and roll are thus displacements along orthogonal
+    axes of the track plane, as the track's diagonal mass matrix has them. The origin's rate
+    along n', z_t, is not in the frame: :func:`_wheelset` subtracts it."""
     c, s = math.cos(roll), math.sin(roll)
     l0, l1, l2 = fr.l
     n0, n1, n2 = fr.n
     w0, w1, w2 = fr.w
     (eL, eLt), (eR, eRt) = fr.rails
-    return _Frame(fr.ox, fr.oy, fr.oz + z, fr.oz_t + z_t, fr.t,
-                  (c * l0 + s * n0, c * l1 + s * n1, c * l2 + s * n2),
-                  (c * n0 - s * l0, c * n1 - s * l1, c * n2 - s * l2),
+    m0, m1, m2 = c * n0 - s * l0, c * n1 - s * l1, c * n2 - s * l2
+    return _Frame(fr.ox + z * m0, fr.oy + z * m1, fr.oz + z * m2, fr.oz_t, fr.t,
+                  (c * l0 + s * n0, c * l1 + s * n1, c * l2 + s * n2), (m0, m1, m2),
                   (w0 + roll_t, c * w1 + s * w2, c * w2 - s * w1), fr.kappa,
                   ((eL + y, eLt + y_t), (eR + y, eRt + y_t)))
 
@@ -208,8 +223,10 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
     wheels' (contact, track-frame force), and its pose (lateral y, yaw, mean lateral rail
     offset) in the track frame)."""
     flexible = len(q) == 10
+    track_z_t = 0.0  # the flexible track's rate along its normal (_moved)
     if flexible:
         fr = _moved(fr, q[7], q[8], q[9], qt[7], qt[8], qt[9])
+        track_z_t = qt[8]
     a, b, c = q[3], q[4], q[5]
     ca, sa, cb, sb, cc, sc = ops.cos(a), ops.sin(a), ops.cos(b), ops.sin(b), ops.cos(c), \
         ops.sin(c)
@@ -227,8 +244,10 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
     rx = tx * dx + ty * dy
     ry = lx * dx + ly * dy + lz * dz
     rz = nx * dx + ny * dy + nz * dz
-    vx, vy, vz = qt[0], qt[1], qt[2] - fr.oz_t
-    # rates relative to the moving, turning frame: R^T (v - V t - oz' e_z) - W x r
+    vx = qt[0] - track_z_t * nx
+    vy = qt[1] - track_z_t * ny
+    vz = qt[2] - fr.oz_t - track_z_t * nz
+    # rates relative to the moving, turning frame: R^T (v - V t - origin') - W x r
     x_t = tx * vx + ty * vy - su.V - (W1 * rz - W2 * ry)
     y_t = lx * vx + ly * vy + lz * vz - (W2 * rx - W0 * rz)
     z_t = nx * vx + ny * vy + nz * vz - (W0 * ry - W1 * rx)
@@ -255,7 +274,7 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
     Q = (Fgx, Fgy, Fgz, Mbx, ca * Mby + sa * Mbz, sb * Mbx - sa * cb * Mby + ca * cb * Mbz,
          m_spin, 0.0, 0.0, 0.0)
     if flexible:  # the rails get the opposite of the contact forces (module docstring)
-        Q = Q[:7] + (-F1, su.track_preload - Fgz, -(M0 + ry * F2 - rz * F1))
+        Q = Q[:7] + (-F1, su.track_preload * nz - F2, -(M0 + ry * F2 - rz * F1))
     e_mean = 0.5 * (fr.rails[0][0] + fr.rails[1][0])
     return Q, ((wl, Fl), (wr, Fr)), (ry, yaw, e_mean)
 
