@@ -27,7 +27,7 @@ from pathlib import Path
 
 import yaml
 
-from cosim.checks import CONTACT_METRICS
+from cosim.limits.checks import CONTACT_METRICS
 
 #: keys of ``curve`` that only contact guidance accepts
 CONTACT_KEYS = ("friction_coefficient", "contact_damping_N_s_per_m", "contact_smoothing_mm")

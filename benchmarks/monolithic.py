@@ -25,10 +25,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from cosim import curve as curve_mod, twist as twist_mod  # noqa: E402
-from cosim.car_runs import build_cosimulation  # noqa: E402
-from cosim.monolithic import curve_headlines, run_monolithic, twist_headlines  # noqa: E402
-from cosim.scenario import load_scenario  # noqa: E402
+from cosim.kinds import curve_entry as curve_mod, twist as twist_mod  # noqa: E402
+from cosim.kinds.car import build_cosimulation  # noqa: E402
+from cosim.verification.monolithic import curve_headlines, run_monolithic, twist_headlines  # noqa: E402
+from cosim.scenario.load import load_scenario  # noqa: E402
 
 SCENARIOS = ROOT / "scenarios"
 #: display scale and unit of each metric

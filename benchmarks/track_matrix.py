@@ -14,7 +14,7 @@ runs that); the run lasts until the car has been 8 s (and at least 20 m) in the 
 per case:
 
 * outcome: ``ok`` (ran to its end), ``stop`` (an impossible state stopped it: a capsized or
-  derailed car, :class:`cosim.experiments.StateLimits`) or ``DIVERGED`` (a solver gave up);
+  derailed car, :class:`cosim.scenario.model.StateLimits`) or ``DIVERGED`` (a solver gave up);
 * ΣY against the balance (contact guidance): the mean over the last 6 s of the four wheelsets'
   lateral forces minus M (v²/R cos c - g sin c), in % of the larger of M v²/R and M g sin c
   (six periods of the ~1 Hz carbody sway, which nothing damps with the valves off at k = inf);
@@ -38,10 +38,10 @@ from pathlib import Path
 
 import numpy as np
 
-from cosim.experiments import CurveTest
+from cosim.scenario.model import CurveTest
 from cosim.runner import run
-from cosim.scenario import load_scenario
-from cosim.verify import HEADLINE_METRICS, estimates, refined
+from cosim.scenario.load import load_scenario
+from cosim.verification.verify import HEADLINE_METRICS, estimates, refined
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "curve_entry.yaml"
 CANTS = (0.0, 0.05, 0.1, 0.15)

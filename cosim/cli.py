@@ -17,20 +17,20 @@ import sys
 from pathlib import Path
 from typing import List, Optional, Sequence
 
-from .executors import ExecutorUnavailable
-from .results import Progress, k_label
-from .schema import ScenarioError
+from cosim.sweep.executors import ExecutorUnavailable
+from cosim.results.io import Progress, k_label
+from cosim.scenario.schema import ScenarioError
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def _version() -> str:
-    from .results import versions
+    from cosim.results.io import versions
     return versions().get("pneumorail", "unknown")
 
 
 def _argument(name: str):
-    """An argparse type from :mod:`cosim.compare`'s parser ``name``, which raises ValueError
+    """An argparse type from :mod:`cosim.results.compare`'s parser ``name``, which raises ValueError
     (argparse then exits 2 with the message); imported when used (matplotlib is slow to load)."""
     def convert(text: str):
         from . import compare
@@ -145,7 +145,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     _show_warnings()
     try:
         if args.command == "compare":
-            from .compare import Selection, compare_runs
+            from cosim.results.compare import Selection, compare_runs
             select = Selection(args.wheels, tuple(args.k) if args.k else None, args.time)
             for path in compare_runs(args.dirs, args.out, select):
                 print(path)
@@ -192,7 +192,7 @@ def _show_warnings() -> None:
 def _sweep_spec(args, path: Path):
     """The sweep of ``path`` (a sweep file, or a scenario) with the command line's --grid, --zip,
     --set and --k applied."""
-    from .sweep import SweepSpec, is_sweep_file, load_sweep_file, parse_assignment
+    from cosim.sweep.study import SweepSpec, is_sweep_file, load_sweep_file, parse_assignment
     spec = load_sweep_file(path) if is_sweep_file(path) else SweepSpec(path)
     file = spec.source or spec.scenario_file
     for option, items, target in (("--grid", getattr(args, "grid", []), spec.grid),
@@ -212,8 +212,8 @@ def _sweep_spec(args, path: Path):
 
 
 def _sweep(args) -> int:
-    from .executors import make_executor
-    from .sweep import prepare, run_sweep
+    from cosim.sweep.executors import make_executor
+    from cosim.sweep.study import prepare, run_sweep
     spec = _sweep_spec(args, args.scenario)
     file = spec.source or spec.scenario_file
     jobs = 2 if args.jobs is None else args.jobs
@@ -242,7 +242,7 @@ def _load(args, path: Optional[Path] = None):
     that does not apply to the scenario's kind is refused, not ignored."""
     import dataclasses
 
-    from .scenario import CAR_KINDS, load_scenario
+    from cosim.scenario.load import CAR_KINDS, load_scenario
     path = path or args.scenario
     scenario = load_scenario(path, args.overrides, args.k)
     if args.k and scenario.kind == "rig_table2":
@@ -260,7 +260,7 @@ def _load(args, path: Optional[Path] = None):
 
 
 def _presets(args) -> int:
-    from .presets import PRESETS, preset_yaml, summary
+    from cosim.scenario.presets import PRESETS, preset_yaml, summary
     if args.name is None:
         for name, (section, _) in PRESETS.items():
             print(f"{name:<24} {section:<8} {summary(name)}")
@@ -274,7 +274,7 @@ def _presets(args) -> int:
 
 def _validate(args) -> int:
     """Load and check every file (a sweep file: every case) without running anything."""
-    from .sweep import is_sweep_file, prepare
+    from cosim.sweep.study import is_sweep_file, prepare
     bad = 0
     for path in args.scenarios:
         try:
@@ -292,8 +292,8 @@ def _validate(args) -> int:
 
 
 def _verify(args) -> int:
-    from .scenario import CAR_KINDS
-    from .verify import report, verify
+    from cosim.scenario.load import CAR_KINDS
+    from cosim.verification.verify import report, verify
     scenario = _load(args)
     if scenario.kind not in CAR_KINDS:
         raise ScenarioError(args.scenario, ["kind"], f"verify needs a car scenario ({', '.join(CAR_KINDS)}), "
@@ -312,11 +312,11 @@ def _verify(args) -> int:
 
 
 def _run(args) -> int:
-    from . import interrupts
-    from .outdir import INCOMPLETE, OutputFolder, default_folder
-    from .runner import run_scenario
-    from .checks import CHECK_METRICS
-    from .sweep import is_sweep_file
+    from cosim import interrupts
+    from cosim.results.outdir import INCOMPLETE, OutputFolder, default_folder
+    from cosim.runner import run_scenario
+    from cosim.limits.checks import CHECK_METRICS
+    from cosim.sweep.study import is_sweep_file
     if is_sweep_file(args.scenario):
         raise ScenarioError(args.scenario, [], f"this is a sweep file: pneumorail sweep {args.scenario}"
                                                f"{' --check' if args.command == 'check' else ''}")
@@ -331,7 +331,7 @@ def _run(args) -> int:
     with interrupts.handled(), OutputFolder(out, args.overwrite):
         outcome = run_scenario(scenario, out, progress)
         if args.command == "check" and not interrupts.stop_requested():
-            from .writer import write_verdict
+            from cosim.results.writer import write_verdict
             write_verdict(outcome, out)
     if interrupts.stop_requested():
         name = signal.Signals(interrupts.received_signal()).name

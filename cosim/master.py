@@ -45,8 +45,8 @@ import numpy as np
 from pneumatics.circuit import Circuit, CircuitDiverged
 from vehicle.errors import Derailed
 
-from .interrupts import stop_requested
-from .watch import StateWatch
+from cosim.interrupts import stop_requested
+from cosim.limits.watch import StateWatch
 from pneumatics.integrate import advance, stable_step_s
 
 COUPLINGS = ("linearised", "explicit")
@@ -224,7 +224,7 @@ class CoSimulation:
 
     def _stop_impossible_cars(self, z1: np.ndarray, t1: float, cars: bool) -> None:
         """Stop every running case whose bellows are crushed flat or, with ``cars``, whose car
-        is in a state no car can be in (:class:`~cosim.watch.StateWatch`)."""
+        is in a state no car can be in (:class:`~cosim.limits.watch.StateWatch`)."""
         fractions = self.circuit.bellow_volume_fractions(z1)
         for j in np.flatnonzero(self.active):
             reason = self.watch.bellows(fractions[:, j], self.circuit.bellow_names, t1) or \

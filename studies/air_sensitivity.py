@@ -26,8 +26,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from cosim.cli import _k_list  # noqa: E402
 from cosim.runner import run  # noqa: E402
-from cosim.results import k_label, write_rows  # noqa: E402
-from cosim.scenario import load_scenario  # noqa: E402
+from cosim.results.io import k_label, write_rows  # noqa: E402
+from cosim.scenario.load import load_scenario  # noqa: E402
 
 SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "curve_entry.yaml"
 

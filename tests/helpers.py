@@ -33,7 +33,7 @@ def write_scenario(tmp_path: Path, data: dict, name: str = "scenario.yaml") -> P
 
 def vehicle_file(folder: Path, preset: str = "paper_metro_car") -> Path:
     """A vehicle parameter file written from a preset (``pneumorail presets NAME``)."""
-    from cosim.presets import preset_yaml
+    from cosim.scenario.presets import preset_yaml
     path = Path(folder) / f"{preset}.yaml"
     path.write_text(preset_yaml(preset))
     return path

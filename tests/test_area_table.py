@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cosim.scenario import load_scenario
-from cosim.schema import ScenarioError
+from cosim.scenario.load import load_scenario
+from cosim.scenario.schema import ScenarioError
 from helpers import SCENARIOS
 from pneumatics.chamber import Bellow
 from pneumatics.circuit import Circuit, CircuitError

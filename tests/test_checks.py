@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import yaml
 
-from cosim.criteria import window_drift, window_mean
-from cosim.checks import CaseMetrics, Check
-from cosim.outcome import Outcome
-from cosim.scenario import load_scenario
-from cosim.schema import ScenarioError
+from cosim.limits.criteria import window_drift, window_mean
+from cosim.limits.checks import CaseMetrics, Check
+from cosim.results.outcome import Outcome
+from cosim.scenario.load import load_scenario
+from cosim.scenario.schema import ScenarioError
 from helpers import SCENARIOS, short_twist, write_scenario
 from vehicle.car import WHEELS
 

@@ -8,8 +8,8 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from cosim import cli
-from cosim.plots import curve_style
-from cosim.validity import PIPE_MACH_MAX, T_RANGE_K, flag_rows, failures
+from cosim.results.plots import curve_style
+from cosim.limits.validity import PIPE_MACH_MAX, T_RANGE_K, flag_rows, failures
 from helpers import SCENARIOS, short_twist, write_scenario
 
 
@@ -94,7 +94,7 @@ def test_every_curve_of_a_panel_looks_different():
 def test_errors_raised_in_workers_survive_pickling():
     # a worker's exception crosses the process boundary by pickle: it must arrive as itself
     import pickle
-    from cosim.schema import ScenarioError
+    from cosim.scenario.schema import ScenarioError
     from pneumatics.circuit import CircuitDiverged, CircuitError
     for error in (ScenarioError("s.yaml", ["circuit", "tank", "V_m3"], "must be > 0"),
                   CircuitError(["tank_FL", "p0_Pa"], "initial pressure is not set"),
@@ -106,8 +106,8 @@ def test_errors_raised_in_workers_survive_pickling():
 
 def test_allowed_validity_flags_do_not_fail_check():
     import dataclasses
-    from cosim.outcome import Outcome
-    from cosim.scenario import load_scenario
+    from cosim.results.outcome import Outcome
+    from cosim.scenario.load import load_scenario
     # no limits: the validity flag alone decides (with the scenario's dqq_max check and no
     # cases, the check's NaN value would fail it whatever the flags)
     s = dataclasses.replace(load_scenario(SCENARIOS / "twist_dqq.yaml"), checks=())
@@ -121,6 +121,6 @@ def test_allowed_validity_flags_do_not_fail_check():
 
 def test_an_explicit_circuits_valve_label_is_what_it_contains(tmp_path):
     # the throttled-tank example has no levelling valve: its runs are labelled valves off
-    from cosim.scenario import load_scenario
+    from cosim.scenario.load import load_scenario
     s = load_scenario(SCENARIOS / "twist_throttled_tanks.yaml")
     assert s.circuit.valves is False and s.twist.valve_settings == (False,)

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 import exudyn
 
-from cosim.car_runs import build_cosimulation
+from cosim.kinds.car import build_cosimulation
 from cosim.cli import main
 from cosim.runner import run
-from cosim.scenario import load_scenario
-from cosim.twist import make_car as twist_car
-from cosim.verify import estimates, floor_of, richardson
+from cosim.scenario.load import load_scenario
+from cosim.kinds.twist import make_car as twist_car
+from cosim.verification.verify import estimates, floor_of, richardson
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 

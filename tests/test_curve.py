@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import yaml
 
-from cosim.criteria import window_mean
-from cosim.curve import car_centre_s_m, make_car, simulate, summary_row, track_roll_rad
-from cosim.scenario import load_scenario
+from cosim.limits.criteria import window_mean
+from cosim.kinds.curve_entry import car_centre_s_m, make_car, simulate, summary_row, track_roll_rad
+from cosim.scenario.load import load_scenario
 from helpers import SCENARIOS, write_scenario
 
 

@@ -14,11 +14,11 @@ import pytest
 import yaml
 
 from cosim import cli
-from cosim.criteria import nadal_limit, prudhomme_limit_N, sliding_mean
-from cosim.curve import simulate, summary_row
-from cosim.scenario import load_scenario
-from cosim.schema import ScenarioError
-from cosim.series import case_columns
+from cosim.limits.criteria import nadal_limit, prudhomme_limit_N, sliding_mean
+from cosim.kinds.curve_entry import simulate, summary_row
+from cosim.scenario.load import load_scenario
+from cosim.scenario.schema import ScenarioError
+from cosim.results.series import case_columns
 from vehicle.params import ContactParams
 from helpers import ROOT, SCENARIOS, write_scenario
 
@@ -175,7 +175,7 @@ IRREGULAR = dict(speed_m_per_s=20.0, straight_m=400.0, arc_m=20.0, duration_s=1.
 
 def _generated(path) -> bytes:
     """The scenario's irregularity generated in a fresh Python process (no cache shared)."""
-    code = ("import sys; from cosim.scenario import load_scenario; s = load_scenario(sys.argv[1]); "
+    code = ("import sys; from cosim.scenario.load import load_scenario; s = load_scenario(sys.argv[1]); "
             "t = s.curve.track_irregularity(s.vehicle); sys.stdout.buffer.write(t.s_m.tobytes() + t.lateral_m.tobytes())")
     return subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, check=True, cwd=ROOT).stdout
 

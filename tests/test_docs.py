@@ -5,13 +5,13 @@ from __future__ import annotations
 import subprocess
 from pathlib import Path
 
-from cosim.keyref import reference
+from cosim.scenario.keyref import reference
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_scenario_key_reference_is_current():
-    # regenerate with: python -m cosim.keyref > docs/scenario_keys.md
+    # regenerate with: python -m cosim.scenario.keyref > docs/scenario_keys.md
     assert (ROOT / "docs" / "scenario_keys.md").read_text() == reference()
 
 

@@ -23,7 +23,7 @@ import tempfile
 import yaml
 
 from cosim import cli
-from cosim.scenario import load_scenario
+from cosim.scenario.load import load_scenario
 from helpers import SCENARIOS, short_twist, vehicle_file
 
 PARAMS = vehicle_file(tempfile.mkdtemp(prefix="pneumorail_params_"))   # a parameter file, as a user writes one
@@ -374,7 +374,7 @@ def _main(argv, capsys):
 def test_bad_input_exits_2_naming_the_file_and_the_key(name, tmp_path, capsys, monkeypatch):
     case = CORPUS[name]
     monkeypatch.setattr("cosim.runner.run_scenario", _no_simulation)
-    monkeypatch.setattr("cosim.verify.verify", _no_simulation)
+    monkeypatch.setattr("cosim.verification.verify.verify", _no_simulation)
     path = _write(case, tmp_path)
     out = tmp_path / "out"
     code, err, seconds = _main([case.command, str(path), *case.argv, "--out", str(out)], capsys)

@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cosim import curve, twist
-from cosim.car_runs import build_cosimulation
-from cosim.monolithic import MonolithicCar, curve_headlines, run_monolithic, twist_headlines
-from cosim.scenario import load_scenario
+from cosim.kinds import curve_entry as curve, twist
+from cosim.kinds.car import build_cosimulation
+from cosim.verification.monolithic import MonolithicCar, curve_headlines, run_monolithic, twist_headlines
+from cosim.scenario.load import load_scenario
 from vehicle.car import WHEELS
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"

@@ -13,8 +13,8 @@ import pytest
 
 from cosim import cli
 from cosim.runner import MODULES, run, run_scenario
-from cosim.scenario import load_scenario
-from cosim.results import Progress
+from cosim.scenario.load import load_scenario
+from cosim.results.io import Progress
 from helpers import ROOT, SCENARIOS, short_twist, write_scenario
 from vehicle.params import BELLOWS, WHEELS
 
@@ -49,7 +49,7 @@ def test_a_car_run_returns_labelled_time_series(twist):
 def test_the_writer_keeps_the_csv_layout_and_the_values(twist, tmp_path):
     outcome, _ = twist
     from cosim.runner import runner
-    from cosim.writer import write_outcome
+    from cosim.results.writer import write_outcome
     write_outcome(outcome, tmp_path, runner("twist").figures(outcome))
     ds = outcome.series["twist"]
     path = tmp_path / "timeseries" / "twist_valves=on_k=inf.csv"
@@ -81,7 +81,7 @@ def test_warnings_are_not_progress(tmp_path, capsys):
 
 def test_a_rig_runs_without_exudyn():
     # a fresh interpreter: loading and running a rig scenario needs only the pneumatics
-    code = ("import sys; from cosim.scenario import load_scenario; from cosim.runner import run; "
+    code = ("import sys; from cosim.scenario.load import load_scenario; from cosim.runner import run; "
             f"o = run(load_scenario({str(SCENARIOS / 'rig_table2.yaml')!r})); "
             "print(len(o.rows), any('exudyn' in m for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT).stdout

@@ -7,9 +7,9 @@ import subprocess
 
 import pytest
 
-from cosim import results
+from cosim.results import io as results
 from cosim.cli import main
-from cosim.outdir import INCOMPLETE, LOCK, default_folder
+from cosim.results.outdir import INCOMPLETE, LOCK, default_folder
 from helpers import SCENARIOS
 
 SHORT = [str(SCENARIOS / "twist_dqq.yaml"), "--k", "0", "--set", "twist.ramp_s=0.2", "--set", "twist.hold_s=0.2",

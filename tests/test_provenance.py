@@ -39,7 +39,7 @@ def test_an_irregularity_file_is_hashed_with_the_scenario(tmp_path):
     data["curve"]["irregularity"] = {"file": "track.csv"}
     (tmp_path / "track.csv").write_text("s_m,lateral_m\n0,0\n20,0\n30,0.001\n40,0\n")
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
-    from cosim.scenario import load_scenario
+    from cosim.scenario.load import load_scenario
     files = dict(load_scenario(tmp_path / "s.yaml").files_sha256)
     assert files["track.csv"] == hashlib.sha256((tmp_path / "track.csv").read_bytes()).hexdigest()
     assert set(files) == {"s.yaml", "track.csv"}

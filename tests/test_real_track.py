@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from cosim.experiments import StateLimits
-from cosim.watch import StateWatch
+from cosim.scenario.model import StateLimits
+from cosim.limits.watch import StateWatch
 
 
 class FakeCar:
@@ -145,10 +145,10 @@ def test_flexible_track_carries_a_load_by_its_own_stiffness(guidance):
 
 # ---------------------------------------------------------------------------- runs
 from cosim import cli  # noqa: E402
-from cosim.curve import ramp_roll_rate_step_rad_per_s  # noqa: E402
-from cosim.experiments import DEFAULT_SPECTRAL_RADIUS  # noqa: E402
+from cosim.kinds.curve_entry import ramp_roll_rate_step_rad_per_s  # noqa: E402
+from cosim.scenario.model import DEFAULT_SPECTRAL_RADIUS  # noqa: E402
 from cosim.runner import run  # noqa: E402
-from cosim.scenario import load_scenario  # noqa: E402
+from cosim.scenario.load import load_scenario  # noqa: E402
 from helpers import SCENARIOS  # noqa: E402
 import vehicle.car  # noqa: E402
 

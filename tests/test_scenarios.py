@@ -8,8 +8,8 @@ import pytest
 import yaml
 
 from cosim import cli
-from cosim.scenario import load_scenario
-from cosim.schema import ScenarioError
+from cosim.scenario.load import load_scenario
+from cosim.scenario.schema import ScenarioError
 from helpers import SCENARIOS, short_twist, vehicle_file, write_scenario
 
 RIG = yaml.safe_load((SCENARIOS / "rig_ramp.yaml").read_text())
@@ -177,13 +177,13 @@ def test_inconsistent_car_parameters_are_bad_input(tmp_path):
 def test_a_printed_vehicle_preset_loads_back_as_the_preset(tmp_path, name):
     # pneumorail presets NAME > car.yaml gives a file that is the preset, field by field (exact:
     # the YAML holds the literals)
-    from cosim.presets import VEHICLE_PRESETS
+    from cosim.scenario.presets import VEHICLE_PRESETS
     s = load_scenario(write_scenario(tmp_path, short_twist(vehicle=str(vehicle_file(tmp_path, name)))))
     assert s.vehicle == VEHICLE_PRESETS[name]()
 
 
 def test_presets_resolve_and_overrides_apply_to_single_fields():
-    from cosim.presets import VEHICLE_PRESETS
+    from cosim.scenario.presets import VEHICLE_PRESETS
     s = load_scenario(SCENARIOS / "two_point_twist.yaml", ["vehicle.carbody_mass_kg=21000", "circuit.tank.V_m3=0.04"])
     arb = VEHICLE_PRESETS["metro_car_arb_dampers"]()
     assert s.vehicle == dataclasses.replace(arb, carbody_mass_kg=21000.0)
@@ -212,7 +212,7 @@ def test_loading_a_rig_scenario_imports_no_exudyn(name):
     # a fresh interpreter: the rig needs only the pneumatics
     import subprocess
     import sys
-    code = ("import sys; from cosim.scenario import load_scenario; "
+    code = ("import sys; from cosim.scenario.load import load_scenario; "
             f"load_scenario({str(SCENARIOS / name)!r}); print(any('exudyn' in m for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"

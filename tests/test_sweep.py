@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from cosim import sweep as sw
+from cosim.sweep import study as sw
 from cosim.cli import main
-from cosim.executors import Pool, Serial
-from cosim.schema import ScenarioError
+from cosim.sweep.executors import Pool, Serial
+from cosim.scenario.schema import ScenarioError
 
 from helpers import short_twist, write_scenario
 
@@ -164,7 +164,7 @@ def test_two_processes_give_identical_results_and_a_rerun_skips_finished_cases(s
 
 def test_dask_local_cluster_gives_the_serial_results(serial_run, tmp_path):
     pytest.importorskip("distributed")
-    from cosim.executors import Dask
+    from cosim.sweep.executors import Dask
     s, serial = serial_run
     run(s, tmp_path / "dask", Dask(2))
     assert csv_text(tmp_path / "dask") == csv_text(serial.out)

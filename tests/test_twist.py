@@ -9,10 +9,10 @@ import pytest
 import yaml
 
 from cosim import cli
-from cosim.criteria import static_wheel_loads, wheel_unloading, window_mean
-from cosim.scenario import load_scenario
-from cosim.car_runs import build_cosimulation
-from cosim.twist import make_car, rail_heights, simulate, wheelset_x_m
+from cosim.limits.criteria import static_wheel_loads, wheel_unloading, window_mean
+from cosim.scenario.load import load_scenario
+from cosim.kinds.car import build_cosimulation
+from cosim.kinds.twist import make_car, rail_heights, simulate, wheelset_x_m
 from helpers import SCENARIOS, short_twist, write_scenario
 from vehicle.car import WHEELS, MetroCar
 
@@ -166,7 +166,7 @@ class _StandingCar:
 
 
 def test_a_diverging_case_stops_alone_and_keeps_its_record(tmp_path):
-    from cosim.car_runs import static_pressures
+    from cosim.kinds.car import static_pressures
     from cosim.master import CoSimulation
     from pneumatics.circuit import Circuit
     s = scenario(tmp_path)
@@ -266,7 +266,7 @@ def test_bogie_twist_alone_loads_the_wheels_through_the_primary_roll_stiffness(t
 
 def test_a_diverged_case_names_no_worst_wheel(tmp_path):
     # NaN from the divergence on: there is no maximum, so no wheel or time to name
-    from cosim.twist import twist_metrics
+    from cosim.kinds.twist import twist_metrics
     s = scenario(tmp_path)
     t = np.linspace(0.0, 2.0, 201)
     dqq = np.zeros((201, 8, 1))

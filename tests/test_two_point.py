@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cosim.car_runs import build_cosimulation
-from cosim.scenario import load_scenario
+from cosim.kinds.car import build_cosimulation
+from cosim.scenario.load import load_scenario
 from helpers import SCENARIOS
 from test_vehicle_components import roll_hand_calculation
 from vehicle.car import MetroCar

@@ -37,8 +37,8 @@ from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
 import yaml
 
-from .results import Progress, k_label, read_rows, write_rows
-from .schema import ScenarioError, k_values
+from cosim.results.io import Progress, k_label, read_rows, write_rows
+from cosim.scenario.schema import ScenarioError, k_values
 
 DONE, FAILED = "done.json", "failed.json"
 K_KEY = "k_W_per_K"
@@ -124,7 +124,7 @@ def parse_assignment(item: str, file, option: str, many: bool) -> Tuple[str, Any
         raise ScenarioError(file, [option], f"expected key.path={'V1,V2,...' if many else 'value'}, got {item!r}")
     key, text = (s.strip() for s in item.split("=", 1))
     _check_key(key, file, [option])
-    from .yaml_input import parse_yaml
+    from cosim.scenario.yaml_input import parse_yaml
     where = [f"{option} {key}"]
     if many:
         items = split_values(text)
@@ -143,7 +143,7 @@ def load_sweep_file(path: Path) -> SweepSpec:
     """A sweep file: a ``sweep:`` section (its keys may also stand at the top level) with
     ``scenario`` (relative to the sweep file), ``grid``, optional ``zip``, ``set`` (base
     overrides: a mapping of key paths to values) and ``k_W_per_K`` (base k values)."""
-    from .scenario import load_yaml
+    from cosim.scenario.load import load_yaml
     path = Path(path)
     data, _ = load_yaml(path)
     if not isinstance(data, dict):
@@ -185,7 +185,7 @@ def load_sweep_file(path: Path) -> SweepSpec:
 
 def is_sweep_file(path: Path) -> bool:
     """Whether ``path`` holds a sweep (a ``sweep:`` section, or ``scenario:`` + ``grid:``)."""
-    from .scenario import load_yaml
+    from cosim.scenario.load import load_yaml
     try:
         data, _ = load_yaml(Path(path))
     except ScenarioError:                   # unreadable, not text, hostile YAML: the caller says why
@@ -259,8 +259,8 @@ class Prepared:
 def prepare(spec: SweepSpec, check: bool = False) -> Prepared:
     """Expand and validate every case (``load_scenario``) before anything runs; bad input is a
     :class:`ScenarioError` naming the file and the key path."""
-    from .checks import CHECK_METRICS
-    from .scenario import load_scenario
+    from cosim.limits.checks import CHECK_METRICS
+    from cosim.scenario.load import load_scenario
     if not spec.grid and not spec.zip:
         raise ScenarioError(spec.source or spec.scenario_file, [spec.where[0]],
                             "nothing to sweep: give at least one grid key (KEY=V1,V2,...)")
@@ -301,7 +301,7 @@ def _blame(exc: ScenarioError, case: Case) -> Tuple[str, Any]:
 
 def _one_process(scenario):
     """Cases are the unit of parallelism: each car scenario runs its k values in one process."""
-    from .scenario import CAR_KINDS
+    from cosim.scenario.load import CAR_KINDS
     if scenario.kind in CAR_KINDS and scenario.solver.jobs != 1:
         scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=1))
     return scenario
@@ -314,7 +314,7 @@ def _run_scenario(scenario, out_dir: Path):
     progress lines."""
     import logging
 
-    from .runner import run_scenario
+    from cosim.runner import run_scenario
     log = logging.getLogger("pneumorail")
     was = log.disabled
     log.disabled = True
@@ -370,7 +370,7 @@ def _metrics_json(case) -> Dict[str, Any]:
 
 
 def _metrics_from_json(items):
-    from .checks import CaseMetrics
+    from cosim.limits.checks import CaseMetrics
     return [CaseMetrics(float(d["k"]), bool(d["valves"]), {m: float(v) for m, v in d["values"].items()},
                         {m: {w: float(v) for w, v in per.items()} for m, per in d["wheels"].items()})
             for d in items]
@@ -405,7 +405,7 @@ class SweepOutcome:
         """Cases where a limit of the base scenario's ``checks:`` is violated, a result is outside
         the models' validity (unless the scenario allows it), or that did not finish (a diverged
         case fails every check; failed or pending cases cannot be checked)."""
-        from .outcome import Outcome
+        from cosim.results.outcome import Outcome
         bad = []
         for case in self.prepared.cases:
             record = self.results.get(case.key)
@@ -665,7 +665,7 @@ def write_plots(outcome: SweepOutcome) -> List[str]:
     """``sweep_<metric>_vs_<key>.png``: each headline metric against each numeric grid key, a
     line per k, a panel per valve setting and value of the other grid keys; with two numeric grid
     keys, ``sweep_<metric>_heatmap.png``: the metric over both, a panel per (valves, k)."""
-    from .plots import Curve, Panel, k_legend, save_panels
+    from cosim.results.plots import Curve, Panel, k_legend, save_panels
     prepared = outcome.prepared
     metrics = PLOT_METRICS.get(prepared.base.kind, ())
     rows = [r for r in table_rows(outcome) if r["status"] in ("ok", "diverged")]

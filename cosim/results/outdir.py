@@ -14,7 +14,7 @@ import shutil
 from pathlib import Path
 from typing import Optional, Sequence
 
-from .schema import ScenarioError
+from cosim.scenario.schema import ScenarioError
 
 LOCK = ".pneumorail.lock"
 INCOMPLETE = "INCOMPLETE"

@@ -1,5 +1,5 @@
 """The bellow-tank virtual test rig scenarios (paper §3): ramp, sine, dynamic stiffness and Table 2,
-each a run returning an :class:`~cosim.outcome.Outcome` and the figures drawn from it."""
+each a run returning an :class:`~cosim.results.outcome.Outcome` and the figures drawn from it."""
 from __future__ import annotations
 
 import math
@@ -14,10 +14,10 @@ from pneumatics.gas import AIR
 from pneumatics.rig import (dynamic_stiffness_sweep, quasi_static_stiffness_table, ramp_motion, run_time_series,
                             sine_motion)
 
-from .experiments import RampTest, Scenario, SineTest
-from .outcome import Outcome, Runner
-from .plots import Curve, Figure, Panel, k_legend
-from .results import Progress, k_label
+from cosim.scenario.model import RampTest, Scenario, SineTest
+from cosim.results.outcome import Outcome, Runner
+from cosim.results.plots import Curve, Figure, Panel, k_legend
+from cosim.results.io import Progress, k_label
 
 
 
@@ -32,7 +32,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
 
 def _keep_diagnosis(ts, diagnoses: List[str], progress: Progress) -> None:
     """Report an early stop (results outside the models' validity are flagged from the summary
-    rows, :mod:`cosim.validity`)."""
+    rows, :mod:`cosim.limits.validity`)."""
     if ts.diagnosis:
         diagnoses.append(ts.diagnosis)
         progress(f"stopped early, results kept up to there: {ts.diagnosis}")

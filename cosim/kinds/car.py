@@ -1,5 +1,5 @@
 """Running cars co-simulated with their circuit, one car per k value, k cases split over processes,
-gathered into one labelled Dataset (:mod:`cosim.series`)."""
+gathered into one labelled Dataset (:mod:`cosim.results.series`)."""
 from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor
@@ -13,14 +13,14 @@ from pneumatics.orifice import Orifice
 from pneumatics.pipe import Pipe
 from vehicle.params import BELLOWS
 
-from .criteria import static_wheel_loads, wheel_unloading
-from .experiments import Scenario
-from .interrupts import install_in_worker
-from .master import CoSimulation
-from .watch import StateWatch
-from .plots import Curve, Panel, k_legend
-from .results import Progress, k_label
-from .series import car_dataset, concat_cases
+from cosim.limits.criteria import static_wheel_loads, wheel_unloading
+from cosim.scenario.model import Scenario
+from cosim.interrupts import install_in_worker
+from cosim.master import CoSimulation
+from cosim.limits.watch import StateWatch
+from cosim.results.plots import Curve, Panel, k_legend
+from cosim.results.io import Progress, k_label
+from cosim.results.series import car_dataset, concat_cases
 
 #: make_car(scenario) -> a car with the vehicle.car.MetroCar interface (module-level: picklable)
 CarFactory = Callable[[Scenario], object]
@@ -124,7 +124,7 @@ def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, durati
 def simulate_cases(scenario: Scenario, settings: Sequence[Optional[bool]], make_car: CarFactory, duration_s: float,
                    progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
     """Every k of ``scenario`` for each valve setting (None: as ``circuit.valves`` says), all on
-    one pool of ``solver.jobs`` processes: one labelled Dataset (:func:`cosim.series.car_dataset`;
+    one pool of ``solver.jobs`` processes: one labelled Dataset (:func:`cosim.results.series.car_dataset`;
     cases valve setting by valve setting, k ascending within each) and the divergence diagnoses
     (prefixed with the valve setting when there are several)."""
     named = any(s is not None for s in settings)

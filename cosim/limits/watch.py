@@ -1,5 +1,5 @@
 """Impossible states stop a case: a capsized carbody, a derailed wheelset, a bellow crushed
-through, air outside physics (:class:`~cosim.experiments.StateLimits`). The co-simulation
+through, air outside physics (:class:`~cosim.scenario.model.StateLimits`). The co-simulation
 master asks :class:`StateWatch` after every macro-step; a case it names stops there with the
 returned diagnosis, like a case whose solver diverged, and keeps what it computed."""
 from __future__ import annotations
@@ -10,7 +10,7 @@ import numpy as np
 
 from vehicle.params import BELLOWS, WHEELS
 
-from .experiments import StateLimits
+from cosim.scenario.model import StateLimits
 
 _BODIES = ("carbody", "front bogie frame", "rear bogie frame")
 

@@ -12,13 +12,13 @@ import xarray as xr
 from vehicle.car import MetroCar
 from vehicle.params import WHEELS
 
-from .car_runs import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
-from .checks import CaseMetrics
-from .criteria import DQQ_LIMIT, window_drift, window_mean
-from .experiments import Scenario, TwistTest
-from .outcome import Outcome, Runner, largest, warn
-from .plots import Figure, Panel
-from .results import Progress, k_label
+from cosim.kinds.car import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
+from cosim.limits.checks import CaseMetrics
+from cosim.limits.criteria import DQQ_LIMIT, window_drift, window_mean
+from cosim.scenario.model import Scenario, TwistTest
+from cosim.results.outcome import Outcome, Runner, largest, warn
+from cosim.results.plots import Figure, Panel
+from cosim.results.io import Progress, k_label
 
 #: wheels every twist plot shows (paper Fig. 8); the worst wheels of the run are added
 PLOT_WHEELS = ("1L", "1R", "4L", "4R")
@@ -78,7 +78,7 @@ def rail_heights(test: TwistTest):
 
 
 def make_car(scenario: Scenario) -> MetroCar:
-    """The car standing on rails that follow the twist (picklable factory for cosim.car_runs)."""
+    """The car standing on rails that follow the twist (picklable factory for cosim.kinds.car)."""
     return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=scenario.solver.mechanics_step_s,
                     spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track)
 
@@ -90,7 +90,7 @@ def valve_settings(scenario: Scenario) -> Sequence[Optional[bool]]:
 
 def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
     """Every case (k value x valve setting) of the twist scenario: the labelled time series (see
-    :mod:`cosim.series`) with the wheel unloading ``dqq`` (ΔQ/Q0, time x wheel x case) added, and
+    :mod:`cosim.results.series`) with the wheel unloading ``dqq`` (ΔQ/Q0, time x wheel x case) added, and
     the divergence diagnoses."""
     ds, diagnoses = simulate_cases(scenario, valve_settings(scenario), make_car, scenario.twist.duration_s, progress)
     add_wheel_unloading(ds, column="dqq_{}")
@@ -100,7 +100,7 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
 def twist_metrics(t_s: np.ndarray, dqq: np.ndarray, test: TwistTest, j: int) -> Dict[str, object]:
     """Summary of case ``j``: the dynamic maxima of ΔQ/Q0 (over the whole run), the quasi-static
     values (means over the final window), their drift (change of the window mean over one
-    window, see :func:`cosim.criteria.window_drift`) and whether it settled: every wheel's drift
+    window, see :func:`cosim.limits.criteria.window_drift`) and whether it settled: every wheel's drift
     below ``settle_drift``."""
     d = dqq[:, :, j]                                          # (samples, 8)
     worst = np.unravel_index(np.argmax(d), d.shape)

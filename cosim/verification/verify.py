@@ -38,8 +38,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from .results import Progress, atomic_write, jsonable, read_rows, write_rows
-from .experiments import Scenario
+from cosim.results.io import Progress, atomic_write, jsonable, read_rows, write_rows
+from cosim.scenario.model import Scenario
 
 #: Differences between levels below this fraction of the scale S count as converged: they are
 #: 1/50 of the default tolerance, below anything a result is judged by (no order is reported).
@@ -172,7 +172,7 @@ def estimates(rows_per_level: Sequence[List[Dict[str, str]]], metrics: Sequence[
 def verify(scenario: Scenario, out: Path, levels: int, progress: Progress) -> Tuple[List[Estimate], Optional[str]]:
     """Run the levels into ``out/level_<i>``; write ``verify.csv`` and add the estimates to level
     0's ``run.json``. Returns the estimates and the diagnoses of diverged runs."""
-    from .runner import run_scenario
+    from cosim.runner import run_scenario
     rows, diverged = [], []
     for level in range(levels + 1):
         variant = refined(scenario, level)

@@ -1,7 +1,7 @@
 """Reading scenario YAML defensively: a stricter ``yaml.SafeLoader``.
 
 A scenario is a few kilobytes of hand-written YAML. Anything else is refused, each within a
-fraction of a second and with a :class:`~cosim.schema.ScenarioError` naming the file (and, where
+fraction of a second and with a :class:`~cosim.scenario.schema.ScenarioError` naming the file (and, where
 there is one, the key path):
 
 * files over :data:`MAX_BYTES`, binary or non-UTF-8 content;
@@ -22,7 +22,7 @@ from typing import Any, List, Sequence, Tuple
 
 import yaml
 
-from .schema import ScenarioError
+from cosim.scenario.schema import ScenarioError
 
 #: Largest scenario or parameter file read [bytes]; the shipped ones are 1-4 kB.
 MAX_BYTES = 256 * 1024

@@ -103,7 +103,7 @@ def _nonneg(unit: str = "", why: str = "") -> Range:
 MAX_SAMPLES = 1_000_000
 #: Largest track twist [per mille] a twist test may apply: three times the largest EN 14363 limit
 #: (7 per mille, bases <= 4 m). Beyond it the "track" is no track: 100 per mille over a 10 m base
-#: raises the rails by 1 m. (The test height is bounded as well: cosim.scenario.MAX_RAIL_LIFT_M.)
+#: raises the rails by 1 m. (The test height is bounded as well: cosim.scenario.load.MAX_RAIL_LIFT_M.)
 MAX_TWIST_PER_MILLE = 21.0
 #: Largest cant [rad]: 0.2 rad is 300 mm over the 1.5 m rail-centre distance; railway cant is
 #: limited to 150-200 mm (EN 13803: 180 mm, ~0.12 rad).
@@ -202,7 +202,7 @@ LIST_RULES: Dict[str, Tuple[bool, bool]] = {
     "StiffnessTest.frequencies_Hz": (True, True),
     "RampTest.configurations": (True, True),
     "TwistTest.raised_wheels": (True, True),
-}   # valve_settings: cosim.scenario._valve_settings
+}   # valve_settings: cosim.scenario.load._valve_settings
 
 
 def _lookup(table: Mapping[str, Any], cls, name: str):

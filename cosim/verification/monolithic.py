@@ -1,8 +1,8 @@
 """A monolithic reference for the co-simulation (issue 7, item 4): the car and its pneumatic
 circuit integrated together, inside exudyn, by one integrator with one step.
 
-Model. The car is the co-simulation's own (``cosim.twist.make_car`` / ``cosim.curve.make_car``,
-built, with the circuit and its initial state, by :func:`cosim.car_runs.build_cosimulation`), with
+Model. The car is the co-simulation's own (``cosim.kinds.twist.make_car`` / ``cosim.kinds.curve_entry.make_car``,
+built, with the circuit and its initial state, by :func:`cosim.kinds.car.build_cosimulation`), with
 two changes:
 
 * the pneumatic state x of one case (one k) becomes exudyn first-order coordinates: a
@@ -77,10 +77,10 @@ import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import NodeGenericODE1, ObjectGenericODE1
 
-from .car_runs import build_cosimulation
-from .criteria import static_wheel_loads, wheel_unloading, window_mean
-from .master import Record
-from .experiments import Scenario
+from cosim.kinds.car import build_cosimulation
+from cosim.limits.criteria import static_wheel_loads, wheel_unloading, window_mean
+from cosim.master import Record
+from cosim.scenario.model import Scenario
 
 _OUT = exu.OutputVariableType
 
@@ -94,9 +94,9 @@ STATE_SCALE = {"m": 1e-6, "T": 1e-3, "q": 1e-6, "mass_through": 1e-6, "energy": 
 
 def _make_car(scenario: Scenario):
     if scenario.kind == "twist":
-        from .twist import make_car
+        from cosim.kinds.twist import make_car
     elif scenario.kind == "curve_entry":
-        from .curve import make_car
+        from cosim.kinds.curve_entry import make_car
     else:
         raise ValueError(f"the monolithic reference runs twist and curve_entry scenarios, not {scenario.kind!r}")
     return make_car
@@ -357,7 +357,7 @@ def curve_headlines(scenario: Scenario, rec: Dict[str, np.ndarray], j: int = 0,
                     window_s: Optional[float] = None) -> Dict[str, float]:
     """Curve headlines of case ``j``: largest |roll| relative to the track plane, its mean over the
     final window (``window_s``, default the scenario's), air injected and exhausted [kg]."""
-    from .curve import track_roll_rad
+    from cosim.kinds.curve_entry import track_roll_rad
     t = np.asarray(rec["t_s"])
     roll = rec["roll_rad"][:, j] - track_roll_rad(scenario, t)
     w = window_s if window_s is not None else scenario.curve.window

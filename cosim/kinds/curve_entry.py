@@ -14,21 +14,21 @@ import xarray as xr
 from vehicle.car import MetroCar
 from vehicle.params import BELLOWS, WHEELS
 
-from .car_runs import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
-from .checks import CaseMetrics
-from .criteria import SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, window_mean
-from .experiments import CurveTest, Scenario
-from .outcome import Outcome, Runner, largest, warn
-from .plots import Figure, Panel
-from .results import Progress
-from .series import WHEELSETS, with_column
+from cosim.kinds.car import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
+from cosim.limits.checks import CaseMetrics
+from cosim.limits.criteria import SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, window_mean
+from cosim.scenario.model import CurveTest, Scenario
+from cosim.results.outcome import Outcome, Runner, largest, warn
+from cosim.results.plots import Figure, Panel
+from cosim.results.io import Progress
+from cosim.results.series import WHEELSETS, with_column
 
 #: components whose link flows are written to the time series
 VALVE_PREFIXES = ("lv_", "dpv_")
 
 
 def make_car(scenario: Scenario) -> MetroCar:
-    """The car running along the curve-entry track (picklable factory for cosim.car_runs), with
+    """The car running along the curve-entry track (picklable factory for cosim.kinds.car), with
     the curve's guidance, contact parameters and track irregularity (generated from its seed in
     each worker: the same track in every one)."""
     curve = scenario.curve
@@ -101,7 +101,7 @@ def track_roll_rad(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
 
 def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
     """Every case (k value x valve setting) of the curve entry: the labelled time series (see
-    :mod:`cosim.series`) with the track plane's roll, the carbody roll relative to it, and the
+    :mod:`cosim.results.series`) with the track plane's roll, the carbody roll relative to it, and the
     flows through the valves added, and the divergence diagnoses."""
     curve = scenario.curve
     ds, diagnoses = simulate_cases(scenario, curve.valve_settings, make_car, curve.duration_s, progress)
@@ -171,7 +171,7 @@ def ramp_roll_rate_step_rad_per_s(curve: CurveTest) -> float:
 
 
 def case_metrics(row: Dict[str, object]) -> CaseMetrics:
-    """The checkable metrics of a summary row (:data:`cosim.checks.CHECK_METRICS`): the wheel
+    """The checkable metrics of a summary row (:data:`cosim.limits.checks.CHECK_METRICS`): the wheel
     metrics per wheel; ``yq_max`` and ``sum_y_max`` [N] only with contact guidance."""
     values = {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}
     wheels = {m: {w: row[f"{m}_{w}"] for w in WHEELS} for m in ("dqq_max", "dqq_2m_max")}
@@ -244,10 +244,10 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
 
     * ``Y_max_<wheel>_N``, ``Y_max_N``: the largest Y (sampled, + towards the track centre);
     * ``yq_max_<wheel>``, ``yq_max``: the largest (Y/Q)_2m, against ``yq_lim`` (Nadal,
-      :func:`cosim.criteria.nadal_limit`);
+      :func:`cosim.limits.criteria.nadal_limit`);
     * ``sum_y_max_<wheelset>_N``, ``sum_y_max_N``: the largest |ΣY_2m| per wheelset and over
       them, against ``sum_y_lim_N`` (Prud'homme as EN 14363 states it, Q0 the static wheel load;
-      :func:`cosim.criteria.prudhomme_limit_N`);
+      :func:`cosim.limits.criteria.prudhomme_limit_N`);
     * ``y_ws_max_<wheelset>_m``, ``y_ws_rails_max_<wheelset>_m``, ``aoa_max_<wheelset>_rad``:
       the largest |lateral displacement| from the design centre line and relative to the rails
       (they differ by the alignment irregularity), and |angle of attack| per wheelset;

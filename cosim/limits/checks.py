@@ -13,8 +13,8 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from vehicle.params import WHEELS
 
-from .results import k_label
-from .schema import ScenarioError
+from cosim.results.io import k_label
+from cosim.scenario.schema import ScenarioError
 
 
 @dataclass(frozen=True)

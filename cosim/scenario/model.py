@@ -1,6 +1,6 @@
 """What a scenario asks for, as data: the experiments (rig tests, the twist, the curve entry), the
 circuits, the solver settings and the :class:`Scenario` that holds them. Nothing here reads files
-or runs anything: :mod:`cosim.scenario` builds these from YAML and validates them, the runners
+or runs anything: :mod:`cosim.scenario.load` builds these from YAML and validates them, the runners
 (:mod:`cosim.runner`) consume them.
 """
 from __future__ import annotations
@@ -21,7 +21,7 @@ from vehicle.irregularities import TrackIrregularity
 from vehicle.params import ContactParams, TrackStructure, VehicleParams
 from vehicle.track import TRANSITION_SHAPES, TrackGeometry  # noqa: F401 (re-exported)
 
-from .checks import Check
+from cosim.limits.checks import Check
 
 RIG_KINDS = ("rig_ramp", "rig_sine", "rig_stiffness", "rig_table2")
 CAR_KINDS = ("twist", "curve_entry")
@@ -89,7 +89,7 @@ class TwistTest:
     (``raised_wheels`` must then be that side of the front bogie, e.g. [1R, 2R]) are in addition
     twisted by h+ = g+ x 2a+ about the bogie centre, leading wheelset + h+/2, trailing - h+/2
     (``bogie_twist_per_mille``, default the EN 14363 limit for 2a+); see
-    :func:`cosim.twist.rail_heights` for the track geometry. Without it: Fig. 7, the carbody twist
+    :func:`cosim.kinds.twist.rail_heights` for the track geometry. Without it: Fig. 7, the carbody twist
     alone.
 
     ``window_s``: final window over which the quasi-static end values are averaged (default 5 s,
@@ -188,7 +188,7 @@ class SolverSettings:
 class StateLimits:
     """States no car can be in: a case whose state passes one of these stops at the end of that
     macro-step with a diagnosis (time, body or component, state) and the run exits 1, keeping
-    what it computed (:mod:`cosim.watch`). Each is far beyond what a running car reaches, so
+    what it computed (:mod:`cosim.limits.watch`). Each is far beyond what a running car reaches, so
     that it marks a capsized, derailed or crushed car, not a demanding one:
 
     * ``carbody_roll_rad``: the carbody rolled relative to the track plane by more than this
@@ -258,7 +258,7 @@ class IrregularitySpec:
     def build(self, track_length_m: float, start_m: float) -> TrackIrregularity:
         """The irregularity along a track of ``track_length_m`` [m]; ``start_m``: where a PSD
         irregularity starts when ``self.start_m`` is None. ``file`` must be an absolute path
-        (:func:`cosim.scenario._curve` resolves it)."""
+        (:func:`cosim.scenario.load._curve` resolves it)."""
         return _irregularity(self, float(track_length_m), float(start_m))
 
 
@@ -399,7 +399,7 @@ class CarCircuit:
 # ----------------------------------------------------------------------------------- scenario
 @dataclass(frozen=True)
 class Scenario:
-    """A validated scenario (built by :func:`cosim.scenario.load_scenario`): where it came from
+    """A validated scenario (built by :func:`cosim.scenario.load.load_scenario`): where it came from
     (file, content hash, overrides, every file read), its k values, and the typed sections of its
     kind -- ``rig`` and ``test`` for the rig kinds, ``vehicle``, ``track``, ``circuit``,
     ``twist`` or ``curve``, ``solver``, ``verify`` and ``checks`` for the car kinds."""
@@ -426,7 +426,7 @@ class Scenario:
     #: states that stop a case (car kinds: ``state_limits``)
     state_limits: StateLimits = StateLimits()
     checks: Tuple[Check, ...] = ()
-    #: validity flags (:data:`cosim.validity.FLAGS`) that ``check`` accepts instead of failing on
+    #: validity flags (:data:`cosim.limits.validity.FLAGS`) that ``check`` accepts instead of failing on
     allow: Tuple[str, ...] = ()
     raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 

@@ -2,7 +2,7 @@
 validate each section, so that it cannot drift from the code (``tests/test_docs.py`` fails when
 the file is stale).
 
-    python -m cosim.keyref > docs/scenario_keys.md
+    python -m cosim.scenario.keyref > docs/scenario_keys.md
 """
 from __future__ import annotations
 
@@ -18,9 +18,9 @@ from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve, SafetyValve
 from vehicle.params import TrackStructure, VehicleParams
 
-from .experiments import (CurveTest, IrregularitySpec, QuasiStaticTest, RampTest, SineTest, SolverSettings, StateLimits,
+from cosim.scenario.model import (CurveTest, IrregularitySpec, QuasiStaticTest, RampTest, SineTest, SolverSettings, StateLimits,
                           StiffnessTest, TwistTest, VerifySettings)
-from .schema import _type_name
+from cosim.scenario.schema import _type_name
 
 #: (YAML section as written in a scenario, dataclass, note); fields set by the layout (a bellow's
 #: name, a pipe's ends) are listed too: they matter in ``circuit.components``.
@@ -50,7 +50,7 @@ SECTIONS = (
 
 HEADER = """# Scenario key reference
 
-Generated from the code by `python -m cosim.keyref > docs/scenario_keys.md` (a test fails when
+Generated from the code by `python -m cosim.scenario.keyref > docs/scenario_keys.md` (a test fails when
 this file is stale). Every key is optional unless the scenario kind needs it; a missing key takes
 the default shown. Units are in the names (SI: Pa absolute, K, kg, m, s, N, W/K). Top-level keys
 of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is isothermal),

@@ -1,5 +1,5 @@
 """What a run computed, in memory: :class:`Outcome`. The runners (:mod:`cosim.runner`) return
-it, :mod:`cosim.writer` turns it into files, ``check`` and sweeps evaluate it."""
+it, :mod:`cosim.results.writer` turns it into files, ``check`` and sweeps evaluate it."""
 from __future__ import annotations
 
 import logging
@@ -7,9 +7,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
-from .checks import CaseMetrics, Check, check_report, check_value, passes
-from .experiments import Scenario
-from .validity import failures
+from cosim.limits.checks import CaseMetrics, Check, check_report, check_value, passes
+from cosim.scenario.model import Scenario
+from cosim.limits.validity import failures
 
 #: warnings about results (validity, settling) go here, not through the progress lines: --quiet
 #: silences progress only
@@ -32,7 +32,7 @@ class Outcome:
     series : dict of str to xarray.Dataset
         Labelled time series (units in each variable's ``units`` attribute), by name: for a car
         run one Dataset, dimensions ``time`` x ``wheel`` / ``bellow`` / ``valve`` / ``link`` x
-        ``case`` (see :mod:`cosim.series`); for a rig one Dataset per run. Written as
+        ``case`` (see :mod:`cosim.results.series`); for a rig one Dataset per run. Written as
         ``timeseries/<name>[_<case>].csv``.
     metrics : dict of str to float
         Totals over the cases (the largest of each headline metric; NaN if a case diverged).
@@ -78,14 +78,14 @@ class Outcome:
         return "\n".join(lines)
 
     def check_value(self, check: Check) -> Tuple[float, str]:
-        """See :func:`cosim.checks.check_value`."""
+        """See :func:`cosim.limits.checks.check_value`."""
         return check_value(check, self.cases, self.metrics)
 
     def check_results(self) -> List[Tuple[Check, float]]:
         return [(c, self.check_value(c)[0]) for c in self.scenario.checks]
 
     def validity_failures(self) -> List[str]:
-        """``case: flag`` for every validity flag (:mod:`cosim.validity`) the scenario does not
+        """``case: flag`` for every validity flag (:mod:`cosim.limits.validity`) the scenario does not
         ``allow``."""
         return failures(self.rows, self.scenario.allow)
 
@@ -123,7 +123,7 @@ class Outcome:
 @dataclass(frozen=True)
 class Runner:
     """How one scenario kind runs: ``run(scenario, progress) -> Outcome`` computes (writes
-    nothing), ``figures(outcome) -> [cosim.plots.Figure]`` says what to draw."""
+    nothing), ``figures(outcome) -> [cosim.results.plots.Figure]`` says what to draw."""
 
     run: Callable[[Scenario, object], Outcome]
     figures: Callable[[Outcome], list]

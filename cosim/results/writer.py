@@ -1,4 +1,4 @@
-"""Turn an :class:`~cosim.outcome.Outcome` into files: the time series (CSV, one file per case),
+"""Turn an :class:`~cosim.results.outcome.Outcome` into files: the time series (CSV, one file per case),
 ``summary.csv``, the figures (PNG) and ``run.json`` (provenance, status, metrics, diagnoses,
 warnings), in that order; every file is written atomically."""
 from __future__ import annotations
@@ -11,10 +11,10 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Sequence
 
-from .outcome import Outcome
-from .plots import Figure
-from .results import atomic_write, jsonable, write_columns, write_rows, write_run_json
-from .series import case_columns
+from cosim.results.outcome import Outcome
+from cosim.results.plots import Figure
+from cosim.results.io import atomic_write, jsonable, write_columns, write_rows, write_run_json
+from cosim.results.series import case_columns
 
 
 def write_outcome(outcome: Outcome, out: Path, figures: Sequence[Figure] = (), jobs: int = 1) -> None:

@@ -15,7 +15,7 @@ from typing import Dict, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from .interrupts import stop_requested
+from cosim.interrupts import stop_requested
 
 
 @contextmanager

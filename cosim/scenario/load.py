@@ -1,4 +1,4 @@
-"""Scenario files: load (a stricter ``yaml.SafeLoader``, :mod:`cosim.yaml_input`), apply ``--set`` overrides, validate everything
+"""Scenario files: load (a stricter ``yaml.SafeLoader``, :mod:`cosim.scenario.yaml_input`), apply ``--set`` overrides, validate everything
 before any simulation starts, and build the typed scenario the runners consume.
 
 A scenario is a YAML mapping with a ``kind``:
@@ -31,19 +31,19 @@ from pneumatics.presets import CIRCUIT_PRESETS
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
 from vehicle.params import TRACK_MODELS, TRACK_PRESETS, WHEELS, TrackStructure, VehicleParams
 
-from .checks import parse_checks
-from .experiments import (CAR_KINDS, DEFAULT_TRACK_MODEL, DEFAULT_TRACK_PRESET, KINDS, RIG_KINDS, RIG_TESTS,
+from cosim.limits.checks import parse_checks
+from cosim.scenario.model import (CAR_KINDS, DEFAULT_TRACK_MODEL, DEFAULT_TRACK_PRESET, KINDS, RIG_KINDS, RIG_TESTS,
                           TRANSITION_SHAPES, CarCircuit, CurveTest, RampTest, RigCircuit, Scenario, SineTest,
                           SolverSettings, StateLimits, TwistTest, VerifySettings)
-from .master import COUPLINGS
-from .presets import VEHICLE_PRESETS
-from .schema import MAX_SAMPLES, ScenarioError, build, check_keys, coerce, describe, k_values, require
-from .yaml_input import MAX_BYTES, parse_yaml, read_yaml
+from cosim.master import COUPLINGS
+from cosim.scenario.presets import VEHICLE_PRESETS
+from cosim.scenario.schema import MAX_SAMPLES, ScenarioError, build, check_keys, coerce, describe, k_values, require
+from cosim.scenario.yaml_input import MAX_BYTES, parse_yaml, read_yaml
 
 __all__ = ["load_scenario", "apply_overrides", "load_yaml", "CAR_KINDS", "RIG_KINDS", "KINDS"]
 
 def load_yaml(path: Path) -> Any:
-    """(data, text) of a scenario or parameter file, read strictly (see :mod:`cosim.yaml_input`)."""
+    """(data, text) of a scenario or parameter file, read strictly (see :mod:`cosim.scenario.yaml_input`)."""
     return read_yaml(path)
 
 
@@ -85,7 +85,7 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
     """Read and validate a scenario file; raises :class:`ScenarioError` before anything runs.
 
     Every check runs here, in the calling process, before any simulation: types, finite numbers
-    in their ranges (:mod:`cosim.schema`), lists non-empty and without duplicates, and the rules
+    in their ranges (:mod:`cosim.scenario.schema`), lists non-empty and without duplicates, and the rules
     between fields (amplitude vs bellow stroke, twist height vs a plausible lift, steps vs duration,
     windows within the run, the circuit assembled and started once)."""
     path = Path(path)
@@ -154,8 +154,8 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
 
 
 def _allow(value, path) -> Tuple[str, ...]:
-    """``allow: [pipe_mach, ...]``: validity flags (cosim.validity.FLAGS) check accepts."""
-    from .validity import FLAGS
+    """``allow: [pipe_mach, ...]``: validity flags (cosim.limits.validity.FLAGS) check accepts."""
+    from cosim.limits.validity import FLAGS
     if value is None:
         return ()
     if not isinstance(value, list):
@@ -269,7 +269,7 @@ def _files_read(path: Path, data: Mapping) -> Tuple[Tuple[str, str], ...]:
 def _check_steps(solver: SolverSettings, duration_s: float, path) -> None:
     """The run and its output interval must be whole numbers of macro-steps (nothing is rounded
     silently), the multibody step no longer than the macro-step, and the run of a
-    bounded size (:data:`MAX_STEPS` macro-steps, :data:`~cosim.schema.MAX_SAMPLES` output rows)."""
+    bounded size (:data:`MAX_STEPS` macro-steps, :data:`~cosim.scenario.schema.MAX_SAMPLES` output rows)."""
     H = solver.macro_step_s
     if H > duration_s * (1 + 1e-9):
         raise ScenarioError(path, ["solver", "macro_step_s"], f"the macro-step ({H:g} s) is longer than the run "
@@ -320,7 +320,7 @@ def _twist(data, vehicle: VehicleParams, path) -> TwistTest:
             raise ScenarioError(path, ["twist", "raised_wheels"], "a bogie twist (bogie_base_m) twists one side of the "
                                                                   "front bogie: expected [1R, 2R] or [1L, 2L], got "
                                                                   f"{list(twist.raised_wheels)}")
-    # Plausible test height. The twist is bounded by MAX_TWIST_PER_MILLE (cosim.schema); the lift
+    # Plausible test height. The twist is bounded by MAX_TWIST_PER_MILLE (cosim.scenario.schema); the lift
     # of the highest rail, twist x base (+ half the bogie twist's height), by MAX_RAIL_LIFT_M.
     # (The bellow stroke is deliberately not the bound: a bellow driven beyond its stroke is a
     # legitimate study of divergence, which the runs diagnose.)
@@ -383,8 +383,8 @@ def _curve(data, vehicle: VehicleParams, path) -> CurveTest:
 
 def _curve_contact(curve: CurveTest, path) -> None:
     """The guidance, the contact model's friction and the limits' parameters of a curve."""
-    from .criteria import nadal_limit
-    from .experiments import GUIDANCE
+    from cosim.limits.criteria import nadal_limit
+    from cosim.scenario.model import GUIDANCE
     if curve.guidance not in GUIDANCE:
         raise ScenarioError(path, ["curve", "guidance"], f"expected one of {', '.join(GUIDANCE)}, got {curve.guidance!r}")
     mu = curve.friction_coefficient
@@ -413,7 +413,7 @@ def _irregularity(value, curve: CurveTest, vehicle: VehicleParams, path):
     """``curve.irregularity``: null, {psd: KIND, seed, ...} or {file: PATH}; generated (or read)
     once here, so that a bad one fails before any run."""
     from vehicle.irregularities import CHANNELS, canonical_kind
-    from .experiments import IrregularitySpec
+    from cosim.scenario.model import IrregularitySpec
     where = ["curve", "irregularity"]
     if not isinstance(value, Mapping):
         raise ScenarioError(path, where, f"expected null, {{psd: erri_b176_low, seed: 1}} or {{file: irregularity.csv}}, "
@@ -598,11 +598,11 @@ def _circuit_error(exc: CircuitError, file, prefix, yaml_key_of) -> ScenarioErro
 
 
 def _check_initial_state(circuit: CarCircuit, car, ks, valve_settings, path) -> None:
-    """Start the circuit once as the runners will (cars/runs: cosim.car_runs.build_cosimulation):
+    """Start the circuit once as the runners will (cars/runs: cosim.kinds.car.build_cosimulation):
     bellow pressures that carry the car's static load, tanks at their bellow's, every k value; an
     initial state that cannot be set (a chamber with no initial pressure, an isothermal chamber
     not at the atmosphere's temperature) fails here, not in a worker process."""
-    from .car_runs import static_pressures
+    from cosim.kinds.car import static_pressures
     explicit = circuit.explicit is not None
     prefix, keys = (["circuit", "components"], {}) if explicit else (["circuit"], _LAYOUT_KEYS)
     for setting in dict.fromkeys(valve_settings):
@@ -668,7 +668,7 @@ def _vehicle(value, file) -> VehicleParams:
 
 
 def _state_limits(value, file) -> StateLimits:
-    """``state_limits``: the states that stop a case (:class:`~cosim.experiments.StateLimits`)."""
+    """``state_limits``: the states that stop a case (:class:`~cosim.scenario.model.StateLimits`)."""
     limits = build(StateLimits, value, file, ["state_limits"])
     for low, high in (("T_min_K", "T_max_K"), ("p_min_Pa", "p_max_Pa")):
         if not getattr(limits, low) < getattr(limits, high):
@@ -678,7 +678,7 @@ def _state_limits(value, file) -> StateLimits:
 
 
 def _track_structure(value, file) -> TrackStructure:
-    """``track``: absent (:data:`~cosim.experiments.DEFAULT_TRACK_MODEL`), ``rigid``, ``flexible``
+    """``track``: absent (:data:`~cosim.scenario.model.DEFAULT_TRACK_MODEL`), ``rigid``, ``flexible``
     (the ``slab_track`` preset), or a mapping ``{model: flexible, preset: NAME, <field>:
     value ...}`` (fields of :class:`~vehicle.params.TrackStructure` on top of the preset)."""
     if value is None:

@@ -12,10 +12,10 @@ import numpy as np
 
 from vehicle.params import WHEELS
 
-from .criteria import DQQ_LIMIT
-from .plots import Curve, Panel, save_panels
-from .results import k_label, read_rows
-from .schema import ScenarioError
+from cosim.limits.criteria import DQQ_LIMIT
+from cosim.results.plots import Curve, Panel, save_panels
+from cosim.results.io import k_label, read_rows
+from cosim.scenario.schema import ScenarioError
 
 #: wheels a twist comparison shows by default (paper Fig. 8), the worst wheel of the runs added
 WHEELS_SHOWN = ("1L", "1R", "4L", "4R")

@@ -16,7 +16,7 @@ import xarray as xr
 
 from vehicle.params import BELLOWS, WHEELS
 
-from .results import k_label
+from cosim.results.io import k_label
 
 #: record entry -> (dimensions after time, units, long name, CSV column pattern or None)
 CAR_VARIABLES = {
