@@ -11,7 +11,6 @@ from typing import Optional, Tuple
 import numpy as np
 
 
-
 @dataclass(frozen=True)
 class Bellow:
     """An airspring: a chamber whose volume and effective area depend on the crushing z.

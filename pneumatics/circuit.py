@@ -48,13 +48,28 @@ from typing import Mapping, NamedTuple, Optional, Sequence
 import numpy as np
 
 from .boundary import Atmosphere, Supply
-from .chamber import (Bellow, Tank, bellow_force_N, bellow_stiffness_N_per_m, heat_flow_into_W,
-                      isothermal_heat_flow_W, temperature_rate_K_per_s)
+from .chamber import (
+    Bellow,
+    Tank,
+    bellow_force_N,
+    bellow_stiffness_N_per_m,
+    heat_flow_into_W,
+    isothermal_heat_flow_W,
+    temperature_rate_K_per_s,
+)
 from .gas import AIR, Gas
 from .orifice import Orifice, orifice_flow_kg_per_s
 from .pipe import Pipe, pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
-from .valves import (DifferentialPressureValve, LevellingValve, SafetyValve,
-                     differential_valve_flow_kg_per_s, lag_rate, lever_conductance, play_output, play_rate)
+from .valves import (
+    DifferentialPressureValve,
+    LevellingValve,
+    SafetyValve,
+    differential_valve_flow_kg_per_s,
+    lag_rate,
+    lever_conductance,
+    play_output,
+    play_rate,
+)
 
 #: YAML ``type`` name -> component class.
 COMPONENT_TYPES = {

@@ -7,10 +7,11 @@ pressure valves ``dpv_F``/``dpv_R``; the main reservoir ``supply``.
 from __future__ import annotations
 
 import dataclasses
-from typing import Dict, Optional
+from typing import Dict, Optional, Sequence
 
 from .boundary import Supply
 from .chamber import Bellow, Tank
+from .orifice import Orifice
 from .pipe import Pipe
 from .valves import DifferentialPressureValve, LevellingValve
 
@@ -54,3 +55,16 @@ def car_circuit(bellow: Bellow, tank: Optional[Tank], pipe: Pipe, *, levelling: 
         for bogie, (left, right) in BOGIES.items():
             comps[f"dpv_{bogie}"] = dataclasses.replace(differential, a=left, b=right)
     return comps
+
+
+def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:
+    """Bellow pressures that carry the static load, eq. (4) solved for p at z = 0; a chamber with no
+    initial pressure of its own that a pipe or an orifice (a throttle) joins to a bellow (its
+    auxiliary tank) starts at that bellow's pressure, so the circuit starts at rest."""
+    p0 = {b: p_atm_Pa + F / components[b].area_m2(0.0) for b, F in zip(BELLOWS, F0_N)}
+    for c in components.values():
+        if isinstance(c, (Pipe, Orifice)):
+            for bellow, other in ((c.a, c.b), (c.b, c.a)):
+                if bellow in p0 and other not in p0 and getattr(components.get(other), "p0_Pa", 0) is None:
+                    p0[other] = p0[bellow]
+    return p0

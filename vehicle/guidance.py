@@ -18,7 +18,7 @@ of its own segment at both of its ends (curvature, cant and their slopes may jum
 * position: cubic Hermite with the exact tangents (cos, sin)(heading) at both ends. The error is
   about spacing^4 / 384 * max|d^4 p / ds^4|; on a clothoid d^4 p / ds^4 ~ 3 kappa kappa' (the
   arc alone: kappa^3), so at the default 0.1 m spacing the paper's transition (R = 100 m over
-  15 m) gives 5e-12 m (measured; 2e-10 m at 0.25 m). tests/test_vehicle_curve.py checks
+  15 m) gives 5e-12 m (measured; 2e-10 m at 0.25 m). tests/vehicle/test_vehicle_curve.py checks
   < 1e-9 m against the exact geometry.
 
 Building the table costs one vectorised evaluation of the whole track (~6 ms per 400 m); the

@@ -1,4 +1,4 @@
-"""Track irregularities (issue 11, item 4): lateral alignment, vertical level, cross-level and gauge
+"""Track irregularities: lateral alignment, vertical level, cross-level and gauge
 as functions of the distance s along the track, read from a CSV file or generated from a
 one-sided power spectral density (ERRI B176 low/high level, FRA classes 1-6) with a seed.
 

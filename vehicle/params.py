@@ -223,7 +223,7 @@ class ContactParams:
     circle of the table's wheel profile); ``contact_spacing_m`` is not used (the contact points
     come from the table: 1.5065 m apart for S1002 on UIC60 1:40, centred). Kept apart from
     :class:`VehicleParams` because dimensionless and text values do not fit its unit-suffixed
-    numeric fields (tests/test_vehicle.py), and so that the scenario YAML mirror of
+    numeric fields (tests/vehicle/test_vehicle.py), and so that the scenario YAML mirror of
     VehicleParams is unchanged."""
 
     # Wheel-rail friction coefficient mu: the creep forces saturate at mu N. 0.36 is the value
@@ -365,7 +365,7 @@ def metro_car_arb_dampers() -> VehicleParams:
     * anti-roll bar 1.0 MN m/rad per bogie ("of order 1 MN m/rad" [I, KS]); e.g. a 50 mm steel
       bar 1.8 m long (27 kN m/rad) with 0.3 m levers and links 2.0 m apart gives 1.2 MN m/rad.
       Quasi-static carbody roll at 1 m/s^2 unbalanced lateral acceleration (hand calculation of
-      tests/test_vehicle_curve.py with the bar added): 0.020 rad without the bar, 0.0095 rad
+      tests/vehicle/test_vehicle_curve.py with the bar added): 0.020 rad without the bar, 0.0095 rad
       with it (bellows 243 kN/m each), 0.012 rad with the bar alone (two-point suspension,
       no bellow roll stiffness): roll coefficients ~0.1-0.2, the usual range;
     * vertical dampers 10 kN s/m each: the Manchester benchmark's 20 kN s/m [M] scaled by the

@@ -14,7 +14,7 @@ numba compiles the car's contact kernels when they are first called.
   exudyn, hence not imported here);
 * :mod:`vehicle.wheelrail.track_contact` -- that law on the wheelsets of a multibody vehicle in
   global coordinates, each with its own track frame and rails (the car's contact guidance;
-  pure math, the exudyn wrapping is in ``vehicle/car.py``), run as compiled kernels;
+  pure math, the exudyn wrapping is in ``vehicle/car/``), run as compiled kernels;
 * :mod:`vehicle.wheelrail.compiled`, :mod:`vehicle.wheelrail.kernel_ops` -- compiling the law
   with numba (one source; cached on disk);
 * ``python -m vehicle.wheelrail.derive_table [--nominal-radius-m R]`` rewrites the shipped tables.
@@ -23,8 +23,7 @@ See ``docs/wheel_rail.md``.
 """
 
 from .contact_law import ContactLawTable, WheelsetParams, WheelsetState
-from .creep import (creep_forces, creepages, hertz_semi_axes, kalker_coefficients,
-                    kalker_linear, shen_hedrick_elkins)
+from .creep import creep_forces, creepages, hertz_semi_axes, kalker_coefficients, kalker_linear, shen_hedrick_elkins
 from .geometry import ContactGeometry, ContactState, ContactTable, PairSetup, default_setup
 from .profiles import Profile, read_profile, read_simpack_profile, write_simpack_profile
 

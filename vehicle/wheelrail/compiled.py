@@ -6,7 +6,7 @@ The force law (:mod:`vehicle.wheelrail.contact_law`) and its application to the 
 symbolic expressions; a **kernel** (:func:`kernel`) runs them compiled to machine code by numba
 (``nopython`` mode), passing the module :mod:`vehicle.wheelrail.kernel_ops` as ``ops`` (the same
 operations as functions numba compiles). So the
-compiled law is the Python law, operation for operation; ``tests/test_compiled_law.py`` checks
+compiled law is the Python law, operation for operation; ``tests/vehicle/test_compiled_law.py`` checks
 that they agree to rounding.
 
 * :func:`jitable` marks a function the kernels call. It stays the plain Python function

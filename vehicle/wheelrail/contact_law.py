@@ -1,4 +1,4 @@
-"""Contact force law of a wheelset on track (issue 11, item 2), as pure functions.
+"""Contact force law of a wheelset on track, as pure functions.
 
 One law, written once against a small table of math operations (``ops``), evaluates either
 
@@ -10,7 +10,7 @@ One law, written once against a small table of math operations (``ops``), evalua
   that exudyn evaluates in C++ (optional there: slower for this law, see that module).
 
 So the force law the tests check without exudyn is, operation for operation, the one exudyn runs.
-This module imports numpy/scipy only (``tests/test_wheelrail.py`` checks the subpackage; numba
+This module imports numpy/scipy only (``tests/vehicle/test_wheelrail.py`` checks the subpackage; numba
 is imported when the first kernel compiles).
 
 Frames, coordinates, signs
@@ -277,7 +277,7 @@ class ContactLawTable:
     where the contact runs through the near-conformal flange root onto the flank. Read as it
     is, it gives a wheelset whose flange-contact modes grow: linearised about its steady
     rolling state pressed against the flange (continuous model, no integrator;
-    :mod:`vehicle.wheelrail.stability`, ``tests/test_contact_stability.py``; 0 to 60 kN of
+    :mod:`vehicle.wheelrail.stability`, ``tests/vehicle/test_contact_stability.py``; 0 to 60 kN of
     lateral load in 4 kN steps) its modes above 100 Hz grow at up to +386 /s with 0.1 mm rows
     and +875 /s with 0.01 mm rows at the jumps (+105 /s with the creep forces off), and normal
     damping up to 1e6 N s/m does not remove that. Smoothed over 0.1 mm with the normal damping

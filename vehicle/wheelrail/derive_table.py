@@ -17,8 +17,7 @@ import sys
 
 import numpy as np
 
-from .geometry import (DEFAULT_RAIL, DEFAULT_WHEEL, ContactTable, COLUMNS,
-                       table_path)
+from .geometry import COLUMNS, DEFAULT_RAIL, DEFAULT_WHEEL, ContactTable, table_path
 
 
 def derive_default(nominal_radius_m: float = 0.46) -> ContactTable:

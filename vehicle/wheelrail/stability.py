@@ -1,5 +1,5 @@
 """Linear stability of a wheelset pressed against the flange: the continuous contact model's
-eigenvalues, without an integrator (issue 11; why the law smooths its table and damps its
+eigenvalues, without an integrator (why the law smooths its table and damps its
 normal force, :class:`~vehicle.wheelrail.contact_law.ContactLawTable`).
 
 The wheelset of :mod:`~vehicle.wheelrail.contact_law` (coordinates y, z, roll, yaw in the
@@ -29,8 +29,7 @@ from typing import NamedTuple, Sequence
 import numpy as np
 from scipy.optimize import fsolve
 
-from .contact_law import GEOMETRY_COLUMNS, SCALAR, ContactLawTable, WheelsetParams, \
-    WheelsetState, generalized_forces
+from .contact_law import GEOMETRY_COLUMNS, SCALAR, ContactLawTable, WheelsetParams, WheelsetState, generalized_forces
 
 __all__ = ["Restraint", "SteadyFlanging", "flange_sweep", "weakest_mode", "weak_mode_study"]
 

@@ -1,8 +1,8 @@
-"""Wheel-rail contact forces on the wheelsets of a multibody vehicle running along a track
-(issue 11, item 3): the force law of :mod:`vehicle.wheelrail.contact_law` applied to wheelsets
-that are rigid bodies in *global* coordinates, each with its own track frame.
+"""Wheel-rail contact forces on the wheelsets of a multibody vehicle running along a track:
+the force law of :mod:`vehicle.wheelrail.contact_law` applied to wheelsets that are rigid bodies
+in *global* coordinates, each with its own track frame.
 
-Pure math (no exudyn import): ``vehicle/car.py`` wraps it in an exudyn ``ObjectGenericODE2``
+Pure math (no exudyn import): the car (:mod:`vehicle.car.build`) wraps it in an exudyn ``ObjectGenericODE2``
 force user function (:meth:`WheelsetTrackContact.forces`) and a Jacobian user function
 (:meth:`WheelsetTrackContact.jacobian`). Both, and :meth:`WheelsetTrackContact.outputs`, are
 kernels numba compiles from the functions below and the law's own
@@ -25,7 +25,7 @@ rolled normal and both rails along the rolled lateral axis, as irregularities mo
 rails get the opposite of the contact forces: on y minus the lateral force, on z the support's
 preload (the static load of the wheelset on its rails, along the normal) minus the normal force,
 on the roll minus the contact moment about the tangent through the origin. The track's own
-mass, stiffness and damping are a separate linear object (``vehicle/car.py``).
+mass, stiffness and damping are a separate linear object (``vehicle/car/``).
 
 Track frame of a wheelset (:meth:`WheelsetTrackContact.set_track`, once per time step): origin
 on the track centre line at rail level at the wheelset's arc length, axes R = Rz(psi) Rx(-cant)
@@ -70,9 +70,17 @@ import numpy as np
 from . import compiled, kernel_ops
 from . import contact_law as _contact_law
 from .compiled import jitable, kernel
-from .contact_law import (GEOMETRY_COLUMNS, SCALAR, ContactLawTable, LawConstants,
-                          WheelGeometry, WheelsetParams, WheelsetState, contact,
-                          force_and_moment)
+from .contact_law import (
+    GEOMETRY_COLUMNS,
+    SCALAR,
+    ContactLawTable,
+    LawConstants,
+    WheelGeometry,
+    WheelsetParams,
+    WheelsetState,
+    contact,
+    force_and_moment,
+)
 
 __all__ = ["WheelsetTrackContact", "WheelContactOutputs", "COORDINATES_PER_WHEELSET"]
 

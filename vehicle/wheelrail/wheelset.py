@@ -1,5 +1,5 @@
-"""A single free wheelset running on track with wheel-rail contact forces: exudyn model
-(issue 11, first multibody step). The force law is :mod:`vehicle.wheelrail.contact_law`.
+"""A single free wheelset running on track with wheel-rail contact forces: an exudyn model.
+The force law is :mod:`vehicle.wheelrail.contact_law`.
 
 Model
 -----
@@ -55,8 +55,17 @@ import numpy as np
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 from scipy.optimize import fsolve
 
-from .contact_law import (GEOMETRY_COLUMNS, NUMPY, SCALAR, ContactLawTable, WheelContact,
-                          WheelsetParams, WheelsetState, generalized_forces, wheelset_forces)
+from .contact_law import (
+    GEOMETRY_COLUMNS,
+    NUMPY,
+    SCALAR,
+    ContactLawTable,
+    WheelContact,
+    WheelsetParams,
+    WheelsetState,
+    generalized_forces,
+    wheelset_forces,
+)
 from .geometry import ContactTable
 
 __all__ = ["FreeWheelset", "WheelsetRun", "symbolic_ops"]
