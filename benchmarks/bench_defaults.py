@@ -5,7 +5,7 @@
     python benchmarks/bench_defaults.py --repeat 5 --only twist
     python benchmarks/bench_defaults.py --root . --root /path/to/other/checkout   # A/B, interleaved
 
-Targets (issue 7, 2-core machine): ``pneumorail run scenarios/twist_dqq.yaml`` <= 10 s and
+Targets (on a 2-core machine): ``pneumorail run scenarios/twist_dqq.yaml`` <= 10 s and
 ``pneumorail run scenarios/curve_entry.yaml`` <= 20 s. Each run is a fresh process
 (``python -m cosim.cli run SCENARIO --out TMP --quiet`` in the checkout's root, which is what
 ``pneumorail run`` does), so imports, the process pool, the result files and the plots count.

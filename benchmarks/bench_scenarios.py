@@ -5,7 +5,7 @@
     python benchmarks/bench_scenarios.py scenarios/curve_entry.yaml --k 0 --set "curve.valve_settings=[true]"
     python benchmarks/bench_scenarios.py scenarios/curve_entry_contact.yaml --against-kinematic
 
-``--against-kinematic`` (issue 11: a contact run within 1.5 times the kinematic one): each
+``--against-kinematic`` (target: a contact run within 1.5 times the kinematic one): each
 scenario is also run as its kinematic twin, the same file with ``curve.guidance: kinematic``
 and without what only contact guidance has (the contact model's keys and the checks of lateral
 wheel-rail metrics), alternating contact and kinematic runs; prints both medians and the ratio.

@@ -26,11 +26,11 @@ sys.path.insert(0, str(ROOT))
 
 import yaml  # noqa: E402
 
-from cosim.sweep import study as sw  # noqa: E402
-from cosim.sweep.executors import Pool, Serial  # noqa: E402
+from cosim.load import load_scenario  # noqa: E402
 from cosim.results.io import Progress  # noqa: E402
 from cosim.runner import run_scenario  # noqa: E402
-from cosim.scenario.load import load_scenario  # noqa: E402
+from cosim.sweep import study as sw  # noqa: E402
+from cosim.sweep.executors import Pool, Serial  # noqa: E402
 
 
 def short_twist(folder: Path) -> Path:

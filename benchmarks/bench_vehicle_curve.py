@@ -12,7 +12,7 @@ wheel loads, the carbody roll and lateral offset.
     python benchmarks/bench_vehicle_curve.py --contact  # contact against kinematic guidance
     python benchmarks/bench_vehicle_curve.py --ceiling  # ... and the time inside the contact law
 
-``--contact`` (issue 11): the same curve entry with ``guidance="contact"`` (free wheelsets on
+``--contact``: the same curve entry with ``guidance="contact"`` (free wheelsets on
 the S1002/UIC60 contact) and with the default kinematic guidance, alternately, 5 ms macro and
 internal steps, median of 3 runs each (``--runs``): wall time per 30 s, the ratio, Newton
 iterations per step, Jacobians, contact-law evaluations per step, and the 1R wheel's Q, Y/Q at
@@ -31,8 +31,8 @@ import statistics
 import time
 
 import numpy as np
-
 from bench_vehicle import drive  # same folder: the master's loop with emulated bellows
+
 from vehicle.car import MetroCar
 from vehicle.params import VehicleParams
 from vehicle.track import TrackGeometry
@@ -142,7 +142,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="1 run of the 5 ms / 5 ms case")
     ap.add_argument("--contact", action="store_true",
-                    help="contact against kinematic guidance (issue 11)")
+                    help="contact against kinematic guidance")
     ap.add_argument("--ceiling", action="store_true",
                     help="contact: the time inside the law, and the ratio to kinematic without it")
     ap.add_argument("--runs", type=int, default=3, help="runs per guidance with --contact")

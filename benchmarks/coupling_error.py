@@ -22,8 +22,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from cosim.cli import _k_list  # noqa: E402
-from cosim.scenario.load import load_scenario  # noqa: E402
 from cosim.kinds.twist import simulate  # noqa: E402
+from cosim.load import load_scenario  # noqa: E402
 
 
 def run(k, hold, H, h_mech):

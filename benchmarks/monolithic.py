@@ -1,4 +1,4 @@
-"""Co-simulation against the monolithic reference (cosim/monolithic.py), one k, full scenarios.
+"""Co-simulation against the monolithic reference (cosim/verification/monolithic.py), one k, full scenarios.
 
     python benchmarks/monolithic.py [--k 0] [--only twist|curve] [--levels 3]
                                     [--twist-duration S] [--curve-duration S]
@@ -16,7 +16,6 @@ air injected from the supply and exhausted to the atmosphere.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import sys
 import time
@@ -25,10 +24,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from cosim.kinds import curve_entry as curve_mod, twist as twist_mod  # noqa: E402
+from cosim.kinds import curve_entry as curve_mod  # noqa: E402
+from cosim.kinds import twist as twist_mod  # noqa: E402
 from cosim.kinds.car import build_cosimulation  # noqa: E402
-from cosim.verification.monolithic import curve_headlines, run_monolithic, twist_headlines  # noqa: E402
-from cosim.scenario.load import load_scenario  # noqa: E402
+from cosim.load import load_scenario  # noqa: E402
+from cosim.verification.monolithic import run_monolithic  # noqa: E402
 
 SCENARIOS = ROOT / "scenarios"
 #: display scale and unit of each metric
@@ -41,16 +41,16 @@ def scenario(kind: str, k: float, duration: float | None):
         sc = load_scenario(SCENARIOS / "twist_dqq.yaml", ["solver.jobs=1"], [k])
         if duration:
             hold = duration - sc.twist.ramp_s
-            sc = dataclasses.replace(sc, twist=dataclasses.replace(sc.twist, hold_s=hold, window_s=min(hold, 5.0)))
+            sc = sc.with_experiment(hold_s=hold, window_s=min(hold, 5.0))
         return sc, sc.twist.duration_s, twist_mod.make_car
     sc = load_scenario(SCENARIOS / "curve_entry.yaml", ["solver.jobs=1"], [k])
     if duration:
-        sc = dataclasses.replace(sc, curve=dataclasses.replace(sc.curve, duration_s=duration))
+        sc = sc.with_experiment(duration_s=duration)
     return sc.with_valves(True), sc.curve.duration_s, curve_mod.make_car
 
 
 def headlines(kind, sc, rec):
-    return twist_headlines(rec) if kind == "twist" else curve_headlines(sc, rec)
+    return twist_mod.record_headlines(sc, rec) if kind == "twist" else curve_mod.record_headlines(sc, rec)
 
 
 def fmt(name, v):

@@ -1,5 +1,5 @@
 """The car over the track users give it: cant x speed x radius x transition length, in both
-guidance modes, at the shipped steps (not a test; tests/test_real_track.py runs a corner of it).
+guidance modes, at the shipped steps (not a test; tests/cosim/test_real_track.py runs a corner of it).
 
     python benchmarks/track_matrix.py                       # the full matrix, both guidances
     python benchmarks/track_matrix.py --guidance contact --cant 0.1016 --speed 10 --radius 100 --transition 15
@@ -38,10 +38,11 @@ from pathlib import Path
 
 import numpy as np
 
-from cosim.scenario.model import CurveTest
+from cosim.kinds import KINDS
+from cosim.kinds.curve_entry import CurveTest
+from cosim.load import load_scenario
 from cosim.runner import run
-from cosim.scenario.load import load_scenario
-from cosim.verification.verify import HEADLINE_METRICS, estimates, refined
+from cosim.verification.verify import estimates, refined
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "curve_entry.yaml"
 CANTS = (0.0, 0.05, 0.1, 0.15)
@@ -98,17 +99,17 @@ def one(args) -> dict:
            "diagnosis": outcome.diverged or "", "balance_pct": balance(outcome),
            "dqq_2m_max": row["dqq_2m_max"], "dqq_max": row["dqq_max"]}
     if verify:
-        rows = [[{k: str(v) for k, v in row.items()}]]
+        rows = [[outcome.rows[0]]]
         stops = [outcome.diverged]
         for level in (1, 2):
             finer = run(refined(scenario, level))
-            rows.append([{k: str(v) for k, v in finer.rows[0].items()}])
+            rows.append([finer.rows[0]])
             stops.append(finer.diverged)
         if any(stops):  # a stop is verified by its time and place at every level
             out["diagnosis"] = "\n      ".join(f"level {i}: {d or 'ran to its end'}" for i, d in enumerate(stops))
             out["verify"] = ("stops", math.nan)
         else:
-            found = estimates(rows, HEADLINE_METRICS["curve_entry"])
+            found = estimates(rows, KINDS[scenario.kind].headline_metrics)
             worst = max(found, key=lambda e: e.error)
             out["verify"] = (worst.metric, worst.error)
     return out

@@ -1,1 +1,44 @@
-"""cosim"""
+"""pneumorail's application layer: scenarios in, results out. The map, in the order the rooms
+import each other (each only from those above it; ``tests/test_architecture.py`` holds it):
+
+* :mod:`cosim.errors`: the exceptions (``ScenarioError``: bad input; ``ExecutorUnavailable``);
+  :mod:`cosim.interrupts`: Ctrl-C and SIGTERM stop a run at a step boundary, keeping its results;
+* ``cosim/scenario/``: what a scenario is, nothing runs: the data (:mod:`~cosim.scenario.model`),
+  the strict YAML reader (:mod:`~cosim.scenario.yaml_input`), the checking of values into
+  dataclasses (:mod:`~cosim.scenario.schema`), circuits (:mod:`~cosim.scenario.circuits`),
+  presets, the ``checks:`` section (:mod:`~cosim.scenario.checks`);
+* ``cosim/limits/``: judging results: the checks evaluated, EN 14363 criteria, the models'
+  validity flags, the state limits that stop an impossible case;
+* :mod:`cosim.master`: the co-simulation master (the macro-step coupling of car and circuit);
+  ``cosim/results/``: the :class:`~cosim.results.outcome.Outcome` of a run, its labelled series,
+  the writer, plots, output folders, what ``compare`` reads;
+* ``cosim/kinds/``: one module per scenario kind (the rig tests, ``twist``, ``curve_entry``):
+  its experiment, its checking, its run, figures and metrics; the registry
+  (:data:`cosim.kinds.KINDS`);
+* :mod:`cosim.load` (:func:`load_scenario`), :mod:`cosim.runner` (:func:`run`,
+  :func:`run_scenario`), :mod:`cosim.keyref` (the generated key reference);
+* ``cosim/verification/``: ``verify`` (every step halved: Richardson) and the monolithic
+  reference; ``cosim/sweep/``: parameter studies on a process pool or Dask;
+* :mod:`cosim.cli`: the ``pneumorail`` command.
+
+The public API, importable from here::
+
+    from cosim import load_scenario, run
+    outcome = run(load_scenario("scenarios/twist_dqq.yaml"))
+"""
+from __future__ import annotations
+
+import importlib
+
+#: public name -> the module that defines it (imported on first use: ``import cosim`` stays cheap)
+_PUBLIC = {"load_scenario": "cosim.load", "run": "cosim.runner", "run_scenario": "cosim.runner",
+           "Outcome": "cosim.results.outcome", "ScenarioError": "cosim.errors",
+           "ExecutorUnavailable": "cosim.errors"}
+
+__all__ = list(_PUBLIC)
+
+
+def __getattr__(name: str):
+    if name in _PUBLIC:
+        return getattr(importlib.import_module(_PUBLIC[name]), name)
+    raise AttributeError(f"module 'cosim' has no attribute {name!r}")

@@ -11,15 +11,15 @@ from __future__ import annotations
 
 import argparse
 import logging
-import signal
 import math
+import signal
 import sys
 from pathlib import Path
 from typing import List, Optional, Sequence
 
-from cosim.sweep.executors import ExecutorUnavailable
-from cosim.results.io import Progress, k_label
-from cosim.scenario.schema import ScenarioError
+from cosim.errors import ExecutorUnavailable, ScenarioError
+from cosim.results.io import Progress
+from cosim.scenario.schema import k_label
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -33,7 +33,7 @@ def _argument(name: str):
     """An argparse type from :mod:`cosim.results.compare`'s parser ``name``, which raises ValueError
     (argparse then exits 2 with the message); imported when used (matplotlib is slow to load)."""
     def convert(text: str):
-        from . import compare
+        from cosim.results import compare
         try:
             return getattr(compare, name)(text)
         except ValueError as exc:
@@ -145,9 +145,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     _show_warnings()
     try:
         if args.command == "compare":
+            from cosim.kinds import overlays
             from cosim.results.compare import Selection, compare_runs
             select = Selection(args.wheels, tuple(args.k) if args.k else None, args.time)
-            for path in compare_runs(args.dirs, args.out, select):
+            for path in compare_runs(args.dirs, args.out, overlays(), select):
                 print(path)
             return EXIT_OK
         if args.command == "validate":
@@ -216,9 +217,7 @@ def _sweep(args) -> int:
     from cosim.sweep.study import prepare, run_sweep
     spec = _sweep_spec(args, args.scenario)
     file = spec.source or spec.scenario_file
-    jobs = 2 if args.jobs is None else args.jobs
-    if jobs < 1:
-        raise ScenarioError(file, ["--jobs"], f"expected at least 1 process, got {jobs}")
+    jobs = 2 if args.jobs is None else _jobs(args.jobs, file)
     executor = make_executor(jobs, dask=args.dask, scheduler=args.scheduler)
     prepared = prepare(spec, check=args.check)
     out = args.out or Path("results") / (spec.name or f"{prepared.base.name}_sweep")
@@ -242,21 +241,29 @@ def _load(args, path: Optional[Path] = None):
     that does not apply to the scenario's kind is refused, not ignored."""
     import dataclasses
 
-    from cosim.scenario.load import CAR_KINDS, load_scenario
+    from cosim.kinds import KINDS
+    from cosim.load import load_scenario
     path = path or args.scenario
     scenario = load_scenario(path, args.overrides, args.k)
-    if args.k and scenario.kind == "rig_table2":
-        raise ScenarioError(path, ["--k"], "does not apply to rig_table2: Table 2 is computed for the adiabatic and "
-                                           "isothermal limits")
+    kind = KINDS[scenario.kind]
+    if args.k and kind.k_fixed:
+        raise ScenarioError(path, ["--k"], f"does not apply to {kind.name}: {kind.k_fixed}")
     jobs = getattr(args, "jobs", None)
     if jobs is not None:
-        if jobs < 1:
-            raise ScenarioError(path, ["--jobs"], f"expected at least 1 process, got {jobs}")
-        if scenario.kind not in CAR_KINDS:
+        _jobs(jobs, path)
+        if not kind.car:
             raise ScenarioError(path, ["--jobs"], f"does not apply to {scenario.kind}: rig scenarios run in one "
                                                   f"process (their cases take seconds)")
         scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=jobs))
     return scenario
+
+
+def _jobs(jobs: int, file) -> int:
+    """``--jobs``, in the range ``solver.jobs`` has (one rule for both)."""
+    from cosim.scenario.model import SolverSettings
+    from cosim.scenario.schema import check_range, range_of
+    check_range(jobs, range_of(SolverSettings, "jobs"), file, ["--jobs"])
+    return jobs
 
 
 def _presets(args) -> int:
@@ -274,6 +281,7 @@ def _presets(args) -> int:
 
 def _validate(args) -> int:
     """Load and check every file (a sweep file: every case) without running anything."""
+    from cosim.kinds import KINDS
     from cosim.sweep.study import is_sweep_file, prepare
     bad = 0
     for path in args.scenarios:
@@ -283,7 +291,7 @@ def _validate(args) -> int:
                 print(f"{path}: valid sweep, {len(prepared.cases)} cases of {prepared.base.kind}")
             else:
                 s = _load(args, path)
-                k = "" if s.kind == "rig_table2" else f", k = {', '.join(map(k_label, s.k_W_per_K))} W/K"
+                k = "" if KINDS[s.kind].k_fixed else f", k = {', '.join(map(k_label, s.k_W_per_K))} W/K"
                 print(f"{path}: valid {s.kind} scenario '{s.name}'{k}, {len(s.checks)} checks")
         except ScenarioError as exc:
             print(f"error: {exc}", file=sys.stderr)
@@ -292,12 +300,12 @@ def _validate(args) -> int:
 
 
 def _verify(args) -> int:
-    from cosim.scenario.load import CAR_KINDS
+    from cosim.kinds import KINDS
     from cosim.verification.verify import report, verify
     scenario = _load(args)
-    if scenario.kind not in CAR_KINDS:
-        raise ScenarioError(args.scenario, ["kind"], f"verify needs a car scenario ({', '.join(CAR_KINDS)}), "
-                                                     f"got {scenario.kind}")
+    if not KINDS[scenario.kind].car:
+        cars = ", ".join(k.name for k in KINDS.values() if k.car)
+        raise ScenarioError(args.scenario, ["kind"], f"verify needs a car scenario ({cars}), got {scenario.kind}")
     levels = scenario.verify.levels if args.levels is None else args.levels
     if levels < 2:
         raise ScenarioError(args.scenario, ["--levels"], f"Richardson extrapolation needs at least 2 halvings, got {levels}")
@@ -313,18 +321,18 @@ def _verify(args) -> int:
 
 def _run(args) -> int:
     from cosim import interrupts
+    from cosim.kinds import KINDS
     from cosim.results.outdir import INCOMPLETE, OutputFolder, default_folder
     from cosim.runner import run_scenario
-    from cosim.limits.checks import CHECK_METRICS
+    from cosim.scenario.checks import checks_hint
     from cosim.sweep.study import is_sweep_file
     if is_sweep_file(args.scenario):
         raise ScenarioError(args.scenario, [], f"this is a sweep file: pneumorail sweep {args.scenario}"
                                                f"{' --check' if args.command == 'check' else ''}")
     scenario = _load(args)
     if args.command == "check" and not scenario.checks:
-        metrics = CHECK_METRICS.get(scenario.kind)
-        hint = (f"add e.g. checks: ['{metrics[0]} <= ...'] (metrics: {', '.join(metrics)})" if metrics
-                else f"{scenario.kind} scenarios have no checkable metrics; use 'run'")
+        kind = KINDS[scenario.kind]
+        hint = checks_hint(kind) + ("" if kind.check_metrics else "; use 'run'")
         raise ScenarioError(scenario.file, ["checks"], f"no checks to evaluate: {hint}")
     out = args.out or default_folder(scenario.name, args.overrides, args.k)
     progress = Progress(scenario.name, quiet=args.quiet)

@@ -2,7 +2,7 @@
 validate each section, so that it cannot drift from the code (``tests/test_docs.py`` fails when
 the file is stale).
 
-    python -m cosim.scenario.keyref > docs/scenario_keys.md
+    python -m cosim.keyref > docs/scenario_keys.md
 """
 from __future__ import annotations
 
@@ -11,6 +11,12 @@ import inspect
 import math
 import typing
 
+from cosim.scenario.model import (
+    SolverSettings,
+    StateLimits,
+    VerifySettings,
+)
+from cosim.scenario.schema import _type_name
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.orifice import Orifice
@@ -18,26 +24,18 @@ from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve, SafetyValve
 from vehicle.params import TrackStructure, VehicleParams
 
-from cosim.scenario.model import (CurveTest, IrregularitySpec, QuasiStaticTest, RampTest, SineTest, SolverSettings, StateLimits,
-                          StiffnessTest, TwistTest, VerifySettings)
-from cosim.scenario.schema import _type_name
-
-#: (YAML section as written in a scenario, dataclass, note); fields set by the layout (a bellow's
-#: name, a pipe's ends) are listed too: they matter in ``circuit.components``.
-SECTIONS = (
-    ("twist", TwistTest, "kind: twist"),
-    ("curve", CurveTest, "kind: curve_entry"),
-    ("curve.irregularity", IrregularitySpec, "kind: curve_entry; null = none"),
-    ("solver", SolverSettings, "twist and curve_entry"),
-    ("verify", VerifySettings, "twist and curve_entry: `pneumorail verify`"),
-    ("state_limits", StateLimits, "twist and curve_entry"),
-    ("track", TrackStructure, "twist and curve_entry: `rigid` (the default), `flexible` (preset `slab_track`), or "
+#: (YAML section as written in a scenario, dataclass, note) of the car kinds' common sections and
+#: the circuit's components; fields set by the layout (a bellow's name, a pipe's ends) are listed
+#: too: they matter in ``circuit.components``. The kinds' own sections come from the registry.
+CAR_SECTIONS = (
+    ("solver", SolverSettings, "the car kinds"),
+    ("verify", VerifySettings, "the car kinds: `pneumorail verify`"),
+    ("state_limits", StateLimits, "the car kinds"),
+    ("track", TrackStructure, "the car kinds: `rigid` (the default), `flexible` (preset `slab_track`), or "
                               "{model: flexible, preset: slab_track, FIELD: value}"),
-    ("test", RampTest, "kind: rig_ramp"),
-    ("test", SineTest, "kind: rig_sine"),
-    ("test", StiffnessTest, "kind: rig_stiffness"),
-    ("test", QuasiStaticTest, "kind: rig_table2"),
-    ("vehicle", VehicleParams, "twist and curve_entry: a parameter file, or {file: ..., FIELD: value}"),
+    ("vehicle", VehicleParams, "the car kinds: a parameter file, or {file: ..., FIELD: value}"),
+)
+CIRCUIT_SECTIONS = (
     ("circuit.bellow", Bellow, "also `type: bellow` in circuit.components"),
     ("circuit.tank", Tank, "also `type: tank`; `tank: null` = no tank"),
     ("circuit.pipe, circuit.cross_pipe", Pipe, "also `type: pipe`; a, b: the nodes it joins"),
@@ -48,17 +46,35 @@ SECTIONS = (
     ("circuit.components: type: orifice", Orifice, "explicit circuits only"),
 )
 
+
+def kind_sections():
+    """(key, dataclass, note) of every kind's experiment section, and of the dataclasses nested in
+    it (``curve.irregularity``)."""
+    from cosim.kinds import KINDS
+    out = []
+    for kind in KINDS.values():
+        out.append((kind.section, kind.experiment, f"kind: {kind.name}"))
+        hints = typing.get_type_hints(kind.experiment)
+        for f in dataclasses.fields(kind.experiment):
+            nested = [t for t in (hints[f.name], *typing.get_args(hints[f.name])) if dataclasses.is_dataclass(t)]
+            if nested:
+                optional = type(None) in typing.get_args(hints[f.name])
+                out.append((f"{kind.section}.{f.name}", nested[0],
+                            f"kind: {kind.name}" + ("; null = none" if optional else "")))
+    return tuple(out)
+
+
 HEADER = """# Scenario key reference
 
-Generated from the code by `python -m cosim.scenario.keyref > docs/scenario_keys.md` (a test fails when
+Generated from the code by `python -m cosim.keyref > docs/scenario_keys.md` (a test fails when
 this file is stale). Every key is optional unless the scenario kind needs it; a missing key takes
 the default shown. Units are in the names (SI: Pa absolute, K, kg, m, s, N, W/K). Top-level keys
 of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is isothermal),
 `checks` (car scenarios: e.g. `dqq_max <= 0.6`, `dqq_max[3R] <= 0.6`, `dqq_max[k=0] <= 0.6`).
-The rig kinds take `circuit: {bellow, tank, pipe, p0_Pa}` and `test`; the car kinds take
-`vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the sections below, or
-an explicit `components:` mapping of named components with a `type`), `solver`, `verify`,
-`state_limits` and their experiment (`twist` or `curve`).
+The rig kinds take `circuit: {bellow, tank, pipe, p0_Pa}` and `test`; the car kinds (`twist`,
+`curve_entry`) take `vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the
+sections below, or an explicit `components:` mapping of named components with a `type`),
+`solver`, `verify`, `state_limits` and their experiment (`twist`, `curve`).
 """
 
 
@@ -91,7 +107,7 @@ def section(key: str, cls, note: str) -> str:
 
 
 def reference() -> str:
-    return HEADER + "".join("\n" + section(*s) for s in SECTIONS)
+    return HEADER + "".join("\n" + section(*s) for s in (*kind_sections(), *CAR_SECTIONS, *CIRCUIT_SECTIONS))
 
 
 if __name__ == "__main__":

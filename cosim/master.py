@@ -37,17 +37,16 @@ pneumatic cost per macro-step is paid once for all of them.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional, Sequence
+from dataclasses import dataclass
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from pneumatics.circuit import Circuit, CircuitDiverged
-from vehicle.errors import Derailed
-
 from cosim.interrupts import stop_requested
 from cosim.limits.watch import StateWatch
+from pneumatics.circuit import Circuit, CircuitDiverged
 from pneumatics.integrate import advance, stable_step_s
+from vehicle.errors import Derailed
 
 COUPLINGS = ("linearised", "explicit")
 
@@ -66,48 +65,110 @@ def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1):
     return motion
 
 
-@dataclass
-class Record:
-    """Sampled co-simulation output: arrays (samples, ..., cases)."""
+@dataclass(frozen=True)
+class Output:
+    """One quantity a car run samples, declared once: the record, the labelled Dataset
+    (:func:`cosim.results.series.car_dataset`) and the CSV time series take it from here.
 
-    t_s: List[float] = field(default_factory=list)
-    wheel_load_N: List[np.ndarray] = field(default_factory=list)      # (8, cases)
-    crushing_m: List[np.ndarray] = field(default_factory=list)        # (4, cases)
-    bellow_force_N: List[np.ndarray] = field(default_factory=list)    # (4, cases)
-    bellow_p_Pa: List[np.ndarray] = field(default_factory=list)       # (4, cases)
-    bellow_T_K: List[np.ndarray] = field(default_factory=list)        # (4, cases)
-    roll_rad: List[np.ndarray] = field(default_factory=list)          # (cases,)
-    air_from_supply_kg: List[np.ndarray] = field(default_factory=list)  # (cases,)
-    air_to_atmosphere_kg: List[np.ndarray] = field(default_factory=list)  # (cases,)
-    link_flow_kg_per_s: List[np.ndarray] = field(default_factory=list)  # (links, cases), a -> b
-    total_mass_kg: List[np.ndarray] = field(default_factory=list)       # (cases,) air in all chambers
-    valve_supply_air_kg: List[np.ndarray] = field(default_factory=list)   # (valves, cases) cumulative
-    valve_exhaust_air_kg: List[np.ndarray] = field(default_factory=list)  # (valves, cases) cumulative
-    valve_supply_open_s: List[np.ndarray] = field(default_factory=list)   # (valves, cases) cumulative
-    valve_exhaust_open_s: List[np.ndarray] = field(default_factory=list)  # (valves, cases) cumulative
-    # wheel-rail outputs, sampled only when the cars run on the wheel-rail contact
-    # (guidance="contact", :data:`CONTACT_FIELDS`); empty otherwise
-    lateral_wheel_force_N: List[np.ndarray] = field(default_factory=list)     # (8, cases) Y, + towards the track centre
-    wheelset_lateral_force_N: List[np.ndarray] = field(default_factory=list)  # (4, cases) ΣY, + left
-    wheelset_lateral_m: List[np.ndarray] = field(default_factory=list)        # (4, cases) + left
-    wheelset_lateral_to_rails_m: List[np.ndarray] = field(default_factory=list)  # (4, cases) + left
-    angle_of_attack_rad: List[np.ndarray] = field(default_factory=list)       # (4, cases)
-    flange_contact: List[np.ndarray] = field(default_factory=list)            # (8, cases) 1 / 0
+    ``dims``: its label dimensions besides time and case (``wheel``, ``wheelset``, ``bellow``,
+    ``link``, ``valve``); ``column``: its CSV column pattern (``{}``: the label; None: not in the
+    CSV); ``read(sample)``: its value at the current state, (..., cases) (:class:`Sample`);
+    ``contact``: sampled only when the cars run on the wheel-rail contact."""
+
+    name: str
+    dims: Tuple[str, ...]
+    unit: str
+    long_name: str
+    column: Optional[str]
+    read: Callable[["Sample"], np.ndarray]
+    contact: bool = False
+
+
+@dataclass
+class Sample:
+    """What the outputs are read from at one sampling instant: the co-simulation (its cars,
+    state x, crushing z) and the circuit's outputs at that state."""
+
+    sim: "CoSimulation"
+    circuit: object         # pneumatics.circuit.CircuitOutputs at (x, z)
+    valve_air: object       # cumulative air through each valve's supply and exhaust side
+    valve_open: object      # cumulative open time of each valve's supply and exhaust side
+
+
+def _per_car(method: str, n: Optional[int] = None) -> Callable[[Sample], np.ndarray]:
+    """A car output (``MetroCar.<method>()``: (n,) or a scalar for n None) stacked over the
+    cases, zeros for a stopped case (it becomes NaN in the record)."""
+    def read(sample: Sample) -> np.ndarray:
+        values = [np.asarray(getattr(car, method)(), dtype=float) if active else np.zeros(n or ())
+                  for car, active in zip(sample.sim.cars, sample.sim.active)]
+        return np.stack(values, axis=-1)
+    return read
+
+
+def _air_from(node: str, sign: float = 1.0) -> Callable[[Sample], np.ndarray]:
+    """Air that left ``node`` (cumulative, kg, per case); 0 when the circuit has no such node."""
+    def read(sample: Sample) -> np.ndarray:
+        sim = sample.sim
+        if node not in sim.circuit.node_names:
+            return np.zeros(len(sim.cars))
+        return sign * sim.circuit.mass_from(sim.x, node)
+    return read
+
+
+#: Every quantity a car run samples, in the order of the Dataset and the CSV columns.
+OUTPUTS = (
+    Output("wheel_load_N", ("wheel",), "N", "vertical wheel-rail force Q", "Q_{}_N", _per_car("wheel_loads_N", 8)),
+    Output("crushing_m", ("bellow",), "m", "bellow crushing z (+ compression)", "z_{}_m", lambda s: s.sim.z),
+    Output("bellow_force_N", ("bellow",), "N", "bellow force F", "F_bellow_{}_N", lambda s: s.circuit.bellow_force_N),
+    Output("bellow_p_Pa", ("bellow",), "Pa", "bellow pressure p (absolute)", "p_bellow_{}_Pa",
+           lambda s: s.circuit.p_Pa[s.sim.bellow_chambers]),
+    Output("bellow_T_K", ("bellow",), "K", "bellow temperature T", "T_bellow_{}_K",
+           lambda s: s.circuit.T_K[s.sim.bellow_chambers]),
+    Output("roll_rad", (), "rad", "carbody roll (absolute, positive left side up)", "roll_carbody_rad",
+           _per_car("carbody_roll_rad")),
+    Output("air_from_supply_kg", (), "kg", "air injected from the supply (cumulative)", "air_from_supply_kg",
+           _air_from("supply")),
+    Output("air_to_atmosphere_kg", (), "kg", "air exhausted to the atmosphere (cumulative)", "air_to_atmosphere_kg",
+           _air_from("atmosphere", -1.0)),
+    Output("link_flow_kg_per_s", ("link",), "kg/s", "mass flow through each link, from its a node to its b node", None,
+           lambda s: s.circuit.link_flow_kg_per_s),
+    Output("total_mass_kg", (), "kg", "air in all chambers", None, lambda s: s.sim.circuit.total_mass_kg(s.sim.x)),
+    Output("valve_supply_air_kg", ("valve",), "kg", "air through each levelling valve's supply side (cumulative)",
+           None, lambda s: s.valve_air.supply),
+    Output("valve_exhaust_air_kg", ("valve",), "kg", "air through each levelling valve's exhaust side (cumulative)",
+           None, lambda s: s.valve_air.exhaust),
+    Output("valve_supply_open_s", ("valve",), "s", "time each levelling valve's supply side was open (cumulative)",
+           None, lambda s: s.valve_open.supply),
+    Output("valve_exhaust_open_s", ("valve",), "s", "time each levelling valve's exhaust side was open (cumulative)",
+           None, lambda s: s.valve_open.exhaust),
+    # wheel-rail contact (guidance: contact only; a kinematic run has none of them)
+    Output("lateral_wheel_force_N", ("wheel",), "N", "lateral wheel-rail force Y (+ towards the track centre)",
+           "Y_{}_N", _per_car("lateral_wheel_forces_N", 8), contact=True),
+    Output("wheelset_lateral_force_N", ("wheelset",), "N", "sum of the lateral wheel forces of a wheelset, ΣY (+ left)",
+           "sumY_{}_N", _per_car("wheelset_lateral_forces_N", 4), contact=True),
+    Output("wheelset_lateral_m", ("wheelset",), "m", "wheelset lateral displacement from the design centre line "
+           "(+ left)", "y_ws_{}_m", _per_car("wheelset_lateral_displacement_m", 4), contact=True),
+    Output("wheelset_lateral_to_rails_m", ("wheelset",), "m", "wheelset lateral displacement relative to its rails "
+           "(+ left; track irregularities subtracted)", "y_ws_rails_{}_m", _per_car("wheelset_lateral_to_rails_m", 4),
+           contact=True),
+    Output("angle_of_attack_rad", ("wheelset",), "rad", "wheelset angle of attack (yaw to the track tangent, + to "
+           "the left)", "aoa_{}_rad", _per_car("angle_of_attack_rad", 4), contact=True),
+    Output("flange_contact", ("wheel",), "1", "flange contact (1: contact angle above the flange threshold)",
+           "flange_{}", _per_car("flange_contact", 8), contact=True),
+)
+
+
+class Record:
+    """Sampled co-simulation output: ``t_s`` and, per :data:`OUTPUTS` entry sampled, a list of
+    arrays (..., cases)."""
+
+    def __init__(self):
+        self.t_s: List[float] = []
+        self.values: Dict[str, List[np.ndarray]] = {o.name: [] for o in OUTPUTS}
 
     def arrays(self) -> Dict[str, np.ndarray]:
-        """Every sampled output as an array (samples, ..., cases); the wheel-rail outputs only
-        when they were sampled."""
-        return {name: np.asarray(values) for name, values in vars(self).items()
-                if values or name not in CONTACT_FIELDS}
-
-
-#: Record entries of the wheel-rail contact -> (the MetroCar output each samples, its length)
-CONTACT_FIELDS = {"lateral_wheel_force_N": (lambda car: car.lateral_wheel_forces_N(), 8),
-                  "wheelset_lateral_force_N": (lambda car: car.wheelset_lateral_forces_N(), 4),
-                  "wheelset_lateral_m": (lambda car: car.wheelset_lateral_displacement_m(), 4),
-                  "wheelset_lateral_to_rails_m": (lambda car: car.contact_state().lateral_to_rails_m, 4),
-                  "angle_of_attack_rad": (lambda car: car.angle_of_attack_rad(), 4),
-                  "flange_contact": (lambda car: car.flange_contact(), 8)}
+        """Every sampled output as an array (samples, ..., cases), ``t_s`` first."""
+        return {"t_s": np.asarray(self.t_s), **{name: np.asarray(v) for name, v in self.values.items() if v}}
 
 
 class CoSimulation:
@@ -132,8 +193,8 @@ class CoSimulation:
         self.active = np.ones(len(self.cars), bool)
         self.diagnoses: List[str] = []
         self.z, self.zd = self._crushing()
-        self._supply = "supply" in circuit.node_names
-        self._bellow_chambers = [circuit.chamber_names.index(b) for b in circuit.bellow_names]
+        #: the circuit's chambers that are the bellows (their order)
+        self.bellow_chambers = [circuit.chamber_names.index(b) for b in circuit.bellow_names]
         self._F_end = None  # bellow forces the cars feel at the end of the last step (4, cases)
         #: the cars run on the wheel-rail contact: :meth:`sample` records its outputs too
         self.contact = any(getattr(car, "guidance", "kinematic") == "contact" for car in self.cars)
@@ -240,38 +301,18 @@ class CoSimulation:
                 self._stop(j, f"impossible state: {reason}")
 
     def sample(self, record: Record) -> None:
+        """Append the current state's :data:`OUTPUTS` to ``record`` (NaN for a stopped case; the
+        contact outputs only when the cars run on the wheel-rail contact)."""
         c = self.circuit
-        out = c.outputs(self.x, self.z)
-        idx = self._bellow_chambers
+        now = Sample(self, c.outputs(self.x, self.z), c.valve_air_kg(self.x), c.valve_open_time_s(self.x))
         stopped = ~self.active
-
-        def live(values):
-            values = np.array(values, dtype=float)
-            values[..., stopped] = np.nan
-            return values
-
         record.t_s.append(self.t)
-        record.wheel_load_N.append(live(np.stack([car.wheel_loads_N() if a else np.zeros(8)
-                                                  for car, a in zip(self.cars, self.active)], axis=1)))
-        record.crushing_m.append(live(self.z))
-        record.bellow_force_N.append(live(out.bellow_force_N))
-        record.bellow_p_Pa.append(live(out.p_Pa[idx]))
-        record.bellow_T_K.append(live(out.T_K[idx]))
-        record.roll_rad.append(live([car.carbody_roll_rad() if a else 0.0 for car, a in zip(self.cars, self.active)]))
-        record.air_from_supply_kg.append(live(c.mass_from(self.x, "supply") if self._supply else np.zeros(len(self.cars))))
-        record.air_to_atmosphere_kg.append(live(-c.mass_from(self.x, "atmosphere")))
-        record.link_flow_kg_per_s.append(live(out.link_flow_kg_per_s))
-        record.total_mass_kg.append(live(c.total_mass_kg(self.x)))
-        air, open_s = c.valve_air_kg(self.x), c.valve_open_time_s(self.x)
-        record.valve_supply_air_kg.append(live(air.supply))
-        record.valve_exhaust_air_kg.append(live(air.exhaust))
-        record.valve_supply_open_s.append(live(open_s.supply))
-        record.valve_exhaust_open_s.append(live(open_s.exhaust))
-        if self.contact:
-            for name, (output, n) in CONTACT_FIELDS.items():
-                getattr(record, name).append(live(np.stack(
-                    [np.asarray(output(car), dtype=float) if a else np.zeros(n)
-                     for car, a in zip(self.cars, self.active)], axis=1)))
+        for output in OUTPUTS:
+            if output.contact and not self.contact:
+                continue
+            values = np.array(output.read(now), dtype=float)
+            values[..., stopped] = np.nan
+            record.values[output.name].append(values)
 
     def run(self, t_end_s: float, output_interval_s: float,
             progress: Optional[Callable[[str, bool], None]] = None) -> tuple[Record, Optional[str]]:

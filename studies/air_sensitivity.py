@@ -21,13 +21,15 @@ import time
 from pathlib import Path
 
 import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 
-from cosim.cli import _k_list  # noqa: E402
-from cosim.runner import run  # noqa: E402
-from cosim.results.io import k_label, write_rows  # noqa: E402
-from cosim.scenario.load import load_scenario  # noqa: E402
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+from cosim.cli import _k_list
+from cosim.load import load_scenario
+from cosim.results.io import write_rows
+from cosim.runner import run
+from cosim.scenario.schema import k_label
 
 SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "curve_entry.yaml"
 

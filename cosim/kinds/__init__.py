@@ -1,1 +1,29 @@
-"""kinds"""
+"""The scenario kinds: one module each, declaring its experiment, how it is checked and run, what
+it draws, its metrics and what ``compare`` overlays (:class:`~cosim.kinds.base.Kind`).
+
+* :mod:`cosim.kinds.rig`: the bellow-tank test rig (paper §3): ``rig_ramp``, ``rig_sine``,
+  ``rig_stiffness``, ``rig_table2``;
+* :mod:`cosim.kinds.twist`: the EN 14363 twist test (paper §4.1): ``twist``;
+* :mod:`cosim.kinds.curve_entry`: a run into a curve (paper §4.2): ``curve_entry``;
+* :mod:`cosim.kinds.car`: what the car kinds share (the co-simulated cases, their Dataset).
+
+A new kind is a module with a ``KIND`` (or ``KINDS``) and one line in :data:`KINDS` below.
+"""
+from __future__ import annotations
+
+from typing import Callable, Dict
+
+from cosim.kinds import curve_entry, rig, twist
+from cosim.kinds.base import Kind
+
+#: kind name (``kind:`` in a scenario) -> its declaration
+KINDS: Dict[str, Kind] = {k.name: k for k in (*rig.KINDS, twist.KIND, curve_entry.KIND)}
+
+
+
+def overlays() -> Dict[str, Callable]:
+    """kind name -> its ``compare`` (the kinds that have one): what ``pneumorail compare`` draws."""
+    return {name: kind.code.compare for name, kind in KINDS.items() if hasattr(kind.code, "compare")}
+
+
+__all__ = ["KINDS", "Kind", "overlays"]

@@ -8,19 +8,18 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import xarray as xr
 
-from pneumatics.circuit import Circuit
-from pneumatics.orifice import Orifice
-from pneumatics.pipe import Pipe
-from vehicle.params import BELLOWS
-
-from cosim.limits.criteria import static_wheel_loads, wheel_unloading
-from cosim.scenario.model import Scenario
 from cosim.interrupts import install_in_worker
-from cosim.master import CoSimulation
+from cosim.limits.criteria import static_wheel_loads, wheel_unloading
 from cosim.limits.watch import StateWatch
+from cosim.master import CoSimulation
+from cosim.results.io import Progress
 from cosim.results.plots import Curve, Panel, k_legend
-from cosim.results.io import Progress, k_label
 from cosim.results.series import car_dataset, concat_cases
+from cosim.scenario.model import Scenario
+from cosim.scenario.schema import k_label
+from pneumatics.circuit import Circuit
+from pneumatics.layouts import static_pressures
+from vehicle.params import BELLOWS
 
 #: make_car(scenario) -> a car with the vehicle.car.MetroCar interface (module-level: picklable)
 CarFactory = Callable[[Scenario], object]
@@ -39,19 +38,6 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
     watch = StateWatch(scenario.state_limits, len(k_values), cars[0].bellow_height_m)
     return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling,
                         case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch)
-
-
-def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:
-    """Bellow pressures that carry the static load, eq. (4) solved for p at z = 0; a chamber with no
-    initial pressure of its own that a pipe or an orifice (a throttle) joins to a bellow (its
-    auxiliary tank) starts at that bellow's pressure, so the circuit starts at rest."""
-    p0 = {b: p_atm_Pa + F / components[b].area_m2(0.0) for b, F in zip(BELLOWS, F0_N)}
-    for c in components.values():
-        if isinstance(c, (Pipe, Orifice)):
-            for bellow, other in ((c.a, c.b), (c.b, c.a)):
-                if bellow in p0 and other not in p0 and getattr(components.get(other), "p0_Pa", 0) is None:
-                    p0[other] = p0[bellow]
-    return p0
 
 
 def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]:

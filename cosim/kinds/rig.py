@@ -1,24 +1,181 @@
-"""The bellow-tank virtual test rig scenarios (paper §3): ramp, sine, dynamic stiffness and Table 2,
-each a run returning an :class:`~cosim.results.outcome.Outcome` and the figures drawn from it."""
+"""The bellow-tank virtual test rig (paper §3): four kinds, ``rig_ramp`` (Fig. 3), ``rig_sine``
+(Fig. 5), ``rig_stiffness`` (Fig. 6) and ``rig_table2`` (Table 2). Each scenario has a rig
+``circuit`` (``bellow``, ``tank``, ``pipe``, ``p0_Pa``) and a ``test``; each run returns an
+:class:`~cosim.results.outcome.Outcome` and the figures drawn from it."""
 from __future__ import annotations
 
 import math
 import time
-from typing import Dict, List
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Mapping, Optional, Tuple
 
 import numpy as np
 import xarray as xr
 
-from pneumatics.chamber import quasi_static_stiffness_N_per_m
+from cosim.errors import ScenarioError
+from cosim.kinds.base import Kind
+from cosim.results.io import Progress, read_rows
+from cosim.results.outcome import Outcome
+from cosim.results.overlay import Selection, case_series
+from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
+from cosim.scenario.circuits import chambers_and_pipe, compile_check, with_preset
+from cosim.scenario.model import Scenario
+from cosim.scenario.schema import MAX_SAMPLES, MAX_STEPS, Range, build, check_keys, coerce, k_label, positive, require
+from pneumatics.chamber import Bellow, Tank, quasi_static_stiffness_N_per_m
 from pneumatics.gas import AIR
-from pneumatics.rig import (dynamic_stiffness_sweep, quasi_static_stiffness_table, ramp_motion, run_time_series,
-                            sine_motion)
+from pneumatics.pipe import Pipe
+from pneumatics.rig import (
+    bellow_tank_components,
+    dynamic_stiffness_sweep,
+    quasi_static_stiffness_table,
+    ramp_motion,
+    run_time_series,
+    sine_motion,
+)
 
-from cosim.scenario.model import RampTest, Scenario, SineTest
-from cosim.results.outcome import Outcome, Runner
-from cosim.results.plots import Curve, Figure, Panel, k_legend
-from cosim.results.io import Progress, k_label
+#: the amplitude of a rig test
+AMPLITUDE = Range(None, None, unit="m", why="a crushing amplitude; 0 moves nothing", nonzero=True)
 
+
+# ----------------------------------------------------------------------------------- tests
+@dataclass(frozen=True)
+class RampTest:
+    """Fig. 3: crushing ramp to ``amplitude_m`` in ``ramp_s``, held until ``duration_s``."""
+
+    amplitude_m: float = 0.02
+    ramp_s: float = 1.0
+    duration_s: float = 30.0
+    samples: int = 601
+    configurations: Tuple[str, ...] = ("bellow_tank", "bellow_only")
+
+    FIELD_RANGES = {"amplitude_m": AMPLITUDE, "samples": Range(2, MAX_SAMPLES, why="stored time points")}
+    FIELD_LIST_RULES = {"configurations": (True, True)}
+
+
+@dataclass(frozen=True)
+class SineTest:
+    """Fig. 5: z = a sin(2 pi f t) for ``duration_s``; the time history is sampled
+    ``samples_per_period`` times a period. The run counts as stabilised when the mean bellow
+    temperature drifts by less than ``stable_drift_K_per_period`` over the last tenth of it
+    (default 1e-3 K: at 1 Hz, less than 4 K an hour)."""
+
+    amplitude_m: float = 0.02
+    frequency_Hz: float = 1.0
+    duration_s: float = 300.0
+    samples_per_period: int = 20
+    stable_drift_K_per_period: float = 1e-3
+
+    FIELD_RANGES = {"amplitude_m": AMPLITUDE, "frequency_Hz": positive("Hz"),
+                    "samples_per_period": Range(2, 10_000, why="stored time points per period"),
+                    "stable_drift_K_per_period": positive("K per period")}
+
+
+@dataclass(frozen=True)
+class StiffnessTest:
+    """Fig. 6: K_dyn (eq. 9) on the periodic steady state for each frequency."""
+
+    amplitude_m: float = 0.02
+    frequencies_Hz: Tuple[float, ...] = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0)
+
+    FIELD_RANGES = {"amplitude_m": AMPLITUDE, "frequencies_Hz": positive("Hz")}
+    FIELD_LIST_RULES = {"frequencies_Hz": (True, True)}
+
+
+@dataclass(frozen=True)
+class QuasiStaticTest:
+    """Table 2: slope of a slow small ramp."""
+
+    amplitude_m: float = 1e-4
+    ramp_s: float = 20.0
+
+    FIELD_RANGES = {"amplitude_m": AMPLITUDE}
+
+
+
+
+@dataclass(frozen=True)
+class RigCircuit:
+    """The rig's circuit: a bellow, its tank (None: the bellow alone) and the pipe between them,
+    all starting at ``p0_Pa``."""
+
+    bellow: Bellow
+    tank: Optional[Tank]
+    pipe: Pipe
+    p0_Pa: float
+
+    def components(self, with_tank: bool = True) -> Dict[str, object]:
+        return bellow_tank_components(self.bellow, self.tank if with_tank else None, self.pipe)
+
+    def initial_pressures(self, components) -> Dict[str, float]:
+        return {n: self.p0_Pa for n, c in components.items() if isinstance(c, (Bellow, Tank))}
+
+
+# ----------------------------------------------------------------------------------- the kinds
+KINDS = (
+    Kind("rig_ramp", "test", RampTest, __name__),
+    Kind("rig_sine", "test", SineTest, __name__),
+    Kind("rig_stiffness", "test", StiffnessTest, __name__),
+    Kind("rig_table2", "test", QuasiStaticTest, __name__,
+         k_fixed="Table 2 is computed for the adiabatic and isothermal limits"),
+)
+_EXPERIMENT = {k.name: k.experiment for k in KINDS}
+
+
+def load(data: Mapping, path, common: Mapping) -> Scenario:
+    """A rig scenario from its checked top level (``common``: the fields every scenario has):
+    the ``circuit`` and the ``test`` of its kind, and the rules between them."""
+    rig = _rig_circuit(require(data, "circuit", path, [], dict), path)
+    test = build(_EXPERIMENT[common["kind"]], data.get("test"), path, ["test"])
+    _check_rig_test(test, rig, path)
+    return Scenario(**common, experiment=test, circuit=rig)
+
+
+def _check_rig_test(test, rig: RigCircuit, path) -> None:
+    """Rules between the fields of a rig test and its circuit."""
+    if isinstance(test, RampTest):
+        for i, c in enumerate(test.configurations):
+            if c not in ("bellow_tank", "bellow_only"):
+                raise ScenarioError(path, ["test", f"configurations[{i}]"], f"expected bellow_tank or bellow_only, "
+                                                                            f"got {c!r}")
+    stroke = rig.bellow.V0_m3 / rig.bellow.dV_dz_m2
+    if not abs(test.amplitude_m) < stroke:
+        raise ScenarioError(path, ["test", "amplitude_m"], f"|amplitude| must be below V0/(dV/dz) = {stroke:.4g} m, "
+                                                           f"where the bellow volume vanishes; got {test.amplitude_m}")
+    if isinstance(test, RampTest):
+        if test.ramp_s > test.duration_s:
+            raise ScenarioError(path, ["test", "ramp_s"], f"the ramp must end within the run (duration_s = "
+                                                          f"{test.duration_s:g} s), got {test.ramp_s:g} s")
+        steps = test.duration_s / (test.ramp_s / 50.0)      # the integrator's largest step: ramp_s / 50
+        if steps > MAX_STEPS:
+            raise ScenarioError(path, ["test", "ramp_s"], f"the integrator steps at most ramp_s/50: a {test.ramp_s:g} s "
+                                                          f"ramp in a {test.duration_s:g} s run takes {steps:.3g} steps "
+                                                          f"(at most {MAX_STEPS:.0e})")
+    if isinstance(test, SineTest):
+        periods = test.duration_s * test.frequency_Hz
+        if periods < 2:
+            raise ScenarioError(path, ["test", "duration_s"], f"expected at least 2 periods of the sine (the summary "
+                                                              f"compares periods), got {periods:.3g} "
+                                                              f"({test.duration_s:g} s at {test.frequency_Hz:g} Hz)")
+        samples = periods * test.samples_per_period + 1
+        if samples > MAX_SAMPLES:
+            raise ScenarioError(path, ["test", "duration_s"], f"the run would store {samples:.3g} samples (duration_s x "
+                                                              f"frequency_Hz x samples_per_period); at most {MAX_SAMPLES:.0e}")
+        if periods * 20 > MAX_STEPS:                        # the integrator's largest step: a period / 20
+            raise ScenarioError(path, ["test", "duration_s"], f"{periods:.3g} periods take {periods * 20:.3g} integration "
+                                                              f"steps (20 a period); at most {MAX_STEPS:.0e}")
+
+
+def _rig_circuit(data: Mapping, file) -> RigCircuit:
+    check_keys(data, ("preset", "bellow", "tank", "pipe", "p0_Pa"), file, ["circuit"])
+    data = with_preset(data, file, ("bellow", "tank", "pipe", "p0_Pa"))
+    bellow, tank, pipe = chambers_and_pipe(data, file)
+    p0 = coerce(require(data, "p0_Pa", file, ["circuit"]), float, file, ["circuit", "p0_Pa"])
+    if not p0 > 0:
+        raise ScenarioError(file, ["circuit", "p0_Pa"], f"expected an absolute pressure > 0 Pa, got {p0:g}")
+    rig = RigCircuit(bellow, tank, pipe, p0)
+    compile_check(rig.components(tank is not None), file, ["circuit"], {"bellow": "bellow", "tank": "tank", "pipe": "pipe"})
+    return rig
 
 
 def run(scenario: Scenario, progress: Progress) -> Outcome:
@@ -57,7 +214,7 @@ def rig_dataset(ts, **attrs) -> xr.Dataset:
 
 def _ramp(scenario: Scenario, progress: Progress, diagnoses: List[str]):
     test: RampTest = scenario.test
-    rig = scenario.rig
+    rig = scenario.circuit
     rows, series = [], {}
     for config in test.configurations:
         comps = rig.components(with_tank=config == "bellow_tank" and rig.tank is not None)
@@ -90,7 +247,7 @@ def _ramp_figures(outcome: Outcome) -> List[Figure]:
 
 def _sine(scenario: Scenario, progress: Progress, diagnoses: List[str]):
     test: SineTest = scenario.test
-    rig = scenario.rig
+    rig = scenario.circuit
     comps = rig.components(with_tank=rig.tank is not None)
     period = 1.0 / test.frequency_Hz
     n = int(round(test.duration_s / period * test.samples_per_period)) + 1
@@ -156,7 +313,7 @@ def _sine_summary(ts, test: SineTest) -> Dict[str, object]:
 
 def _stiffness(scenario: Scenario, progress: Progress, diagnoses: List[str]):
     test = scenario.test
-    rig = scenario.rig
+    rig = scenario.circuit
     comps = rig.components(with_tank=rig.tank is not None)
     t0 = time.perf_counter()
     points = dynamic_stiffness_sweep(comps, scenario.k_W_per_K, test.frequencies_Hz, test.amplitude_m,
@@ -192,7 +349,7 @@ def _stiffness(scenario: Scenario, progress: Progress, diagnoses: List[str]):
 
 def _stiffness_figures(outcome: Outcome) -> List[Figure]:
     scenario, rows = outcome.scenario, outcome.rows
-    test, rig = scenario.test, scenario.rig
+    test, rig = scenario.test, scenario.circuit
     curves = []
     for k in scenario.k_W_per_K:
         pts = [r for r in rows if r["k_W_per_K"] == k and r["stabilised"]]
@@ -222,7 +379,7 @@ def _no_figures(outcome: Outcome) -> List[Figure]:
 
 
 def _table2(scenario: Scenario, progress: Progress, diagnoses: List[str]):
-    rig, test = scenario.rig, scenario.test
+    rig, test = scenario.circuit, scenario.test
     progress("quasi-static stiffness (Table 2)")
     table = quasi_static_stiffness_table(rig.bellow, rig.tank, rig.pipe, rig.p0_Pa, AIR.gamma, test.amplitude_m, test.ramp_s)
     return [{"configuration": r.configuration, "regime": r.regime, "analytic_N_per_m": r.analytic_N_per_m,
@@ -230,5 +387,36 @@ def _table2(scenario: Scenario, progress: Progress, diagnoses: List[str]):
              "relative_difference": r.simulated_N_per_m / r.analytic_N_per_m - 1.0} for r in table], {}
 
 
-RUNNERS = {"rig_ramp": Runner(run, _ramp_figures), "rig_sine": Runner(run, _sine_figures),
-           "rig_stiffness": Runner(run, _stiffness_figures), "rig_table2": Runner(run, _no_figures)}
+def figures(outcome: Outcome) -> List[Figure]:
+    """The figures of a rig run (Table 2 has none: its numbers are the summary)."""
+    return {"rig_ramp": _ramp_figures, "rig_sine": _sine_figures, "rig_stiffness": _stiffness_figures,
+            "rig_table2": _no_figures}[outcome.scenario.kind](outcome)
+
+
+#: what ``compare`` overlays of the rig's time series: kind -> (file prefix, column, axis label)
+OVERLAID = {"rig_ramp": ("ramp_", "F_bellow_N", "bellow force F [N]"),
+            "rig_sine": ("sine_", "T_bellow_K", "bellow temperature T [K]")}
+
+
+def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+    """Overlay several rig runs of one kind: the dynamic stiffness against frequency (the
+    stabilised points), the ramp's bellow force or the sine's bellow temperature against time."""
+    kind = infos[0][1]["kind"]
+    if kind == "rig_stiffness":
+        curves = []
+        for d, _ in infos:
+            rows = [r for r in read_rows(d / "summary.csv") if r["stabilised"] == "True"]
+            for k in sorted({float(r["k_W_per_K"]) for r in rows}):
+                if select.k is not None and k not in select.k:
+                    continue
+                pts = [r for r in rows if float(r["k_W_per_K"]) == k]
+                curves.append(Curve([float(r["frequency_Hz"]) for r in pts],
+                                    [float(r["K_dyn_N_per_m"]) / 1e3 for r in pts], label(d, f"k = {k_label(k)}"), "o-"))
+        return [save_panels(out_dir / "compare_stiffness.png",
+                            [Panel(curves, "frequency f [Hz]", "K_dyn [kN/m]", logx=True)], "Dynamic stiffness comparison")]
+    if kind not in OVERLAID:
+        raise ScenarioError(infos[0][0], ["kind"], f"compare does not support {kind!r} runs (summary.csv holds its numbers)")
+    prefix, column, ylabel = OVERLAID[kind]
+    curves = [Curve(data["t_s"], data[column], label(d, k)) for d, _ in infos for k, data in case_series(d, prefix, select)]
+    return [save_panels(out_dir / f"compare_{kind}.png", [Panel(curves, "time t [s]", ylabel)],
+                        f"{kind} comparison{window}")]

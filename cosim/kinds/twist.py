@@ -1,24 +1,196 @@
 """The EN 14363 twist test (paper §4.1, Figs 7-8): ΔQ/Q across heat-transfer coefficients, with
-the levelling valves isolated and/or connected."""
+the levelling valves isolated and/or connected. Kind ``twist``, section ``twist``
+(:class:`TwistTest`)."""
 from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import xarray as xr
 
-from vehicle.car import MetroCar
-from vehicle.params import WHEELS
-
+from cosim.errors import ScenarioError
+from cosim.kinds.base import Kind
 from cosim.kinds.car import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
 from cosim.limits.checks import CaseMetrics
-from cosim.limits.criteria import DQQ_LIMIT, window_drift, window_mean
-from cosim.scenario.model import Scenario, TwistTest
-from cosim.results.outcome import Outcome, Runner, largest, warn
-from cosim.results.plots import Figure, Panel
-from cosim.results.io import Progress, k_label
+from cosim.limits.criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading, window_drift, window_mean
+from cosim.results.io import Progress
+from cosim.results.outcome import Outcome, largest, warn
+from cosim.results.overlay import Selection, case_series, worst_wheels
+from cosim.results.plots import Curve, Figure, Panel, save_panels
+from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
+from cosim.scenario.schema import Range, build, check_valve_settings, k_label, positive
+from vehicle.params import WHEELS, VehicleParams
+
+#: Largest track twist [per mille] a twist test may apply: three times the largest EN 14363 limit
+#: (7 per mille, bases <= 4 m). Beyond it the "track" is no track: 100 per mille over a 10 m base
+#: raises the rails by 1 m. (The test height is bounded as well: :data:`MAX_RAIL_LIFT_M`.)
+MAX_TWIST_PER_MILLE = 21.0
+#: Highest rail lift of a twist test [m]: three times the largest EN 14363 test height. The limit
+#: twist times its base, (20/2a* + 2) per mille x 2a*, is 20 mm + 2 per mille x 2a*: 60 mm for the
+#: longest bogie-centre distance the rule covers (20 m), plus half the bogie twist's 7 per mille x
+#: 2a+ (~10 mm); 3 x 70 mm ~ 0.2 m. Beyond it a "track" lifts a wheel off any plausible test bench
+#: (100 per mille over a 10 m base: 1 m).
+MAX_RAIL_LIFT_M = 0.2
+_TWIST = Range(0.0, MAX_TWIST_PER_MILLE, unit="per mille", why="3 x the largest EN 14363 limit; 0: untwisted reference")
+
+
+def en14363_twist_limit(base_m: float) -> float:
+    """Track twist [-] for a base 2a [m]: 7e-3 (2a <= 4 m), (20/2a + 2)e-3 (<= 20 m), 3e-3 above."""
+    if base_m <= 4.0:
+        return 7e-3
+    if base_m <= 20.0:
+        return (20.0 / base_m + 2.0) * 1e-3
+    return 3e-3
+
+
+@dataclass(frozen=True)
+class TwistTest:
+    """EN 14363 twist (Fig. 7): the rails under ``raised_wheels`` rise by the test height in
+    ``ramp_s`` (smooth cosine ramp), then hold for ``hold_s``.
+
+    Test height = twist x base. The twist limit of the track the car must negotiate depends on the
+    base length 2a (here the bogie centre distance): 7 permille for 2a <= 4 m, 20/2a + 2 permille
+    for 4 m < 2a <= 20 m, 3 permille above (the rule commonly quoted from EN 14363; set
+    ``twist_per_mille`` to override it).
+
+    EN 14363 twists the car over both bases together: the carbody twist g* over the bogie
+    centre distance 2a* and the bogie twist g+ over the wheelbase 2a+. ``bogie_base_m`` (2a+,
+    the car's wheelbase) switches the bogie twist on: the front bogie's rails on the raised side
+    (``raised_wheels`` must then be that side of the front bogie, e.g. [1R, 2R]) are in addition
+    twisted by h+ = g+ x 2a+ about the bogie centre, leading wheelset + h+/2, trailing - h+/2
+    (``bogie_twist_per_mille``, default the EN 14363 limit for 2a+); see
+    :func:`cosim.kinds.twist.rail_heights` for the track geometry. Without it: Fig. 7, the carbody twist
+    alone.
+
+    ``window_s``: final window over which the quasi-static end values are averaged (default 5 s,
+    or the whole hold if that is shorter); ``settle_drift``: the case counts as settled when every
+    wheel's ΔQ/Q0 drifts by less than that over the final window: its mean over the final window
+    differs from its mean over the window before by less (an undamped ~1 Hz sway left in the
+    window moves the mean by at most 4 b / (w W) of its amplitude b).
+    ``valve_settings``: run with the levelling valves isolated (false) and/or connected (true);
+    null: one run as ``circuit.valves`` says.
+    """
+
+    base_m: float = 10.0
+    twist_per_mille: Optional[float] = None
+    raised_wheels: Tuple[str, ...] = ("1R", "2R")
+    ramp_s: float = 5.0
+    hold_s: float = 35.0
+    bogie_base_m: Optional[float] = None
+    bogie_twist_per_mille: Optional[float] = None
+    window_s: Optional[float] = None
+    settle_drift: float = 1e-3
+    valve_settings: Optional[Tuple[bool, ...]] = None
+
+    FIELD_RANGES = {"base_m": positive("m", "the base length 2a*"), "bogie_base_m": positive("m", "the wheelbase 2a+"),
+                    "twist_per_mille": _TWIST, "bogie_twist_per_mille": _TWIST, "settle_drift": positive(why="a drift of dQ/Q0")}
+    FIELD_LIST_RULES = {"raised_wheels": (True, True)}
+
+    @property
+    def twist(self) -> float:
+        if self.twist_per_mille is not None:
+            return self.twist_per_mille / 1000.0
+        return en14363_twist_limit(self.base_m)
+
+    @property
+    def height_m(self) -> float:
+        return self.twist * self.base_m
+
+    @property
+    def bogie_twist(self) -> float:
+        """g+ [-]: 0 without ``bogie_base_m``."""
+        if self.bogie_base_m is None:
+            return 0.0
+        if self.bogie_twist_per_mille is not None:
+            return self.bogie_twist_per_mille / 1000.0
+        return en14363_twist_limit(self.bogie_base_m)
+
+    @property
+    def bogie_height_m(self) -> float:
+        """h+ = g+ x 2a+ [m]: the height difference between the front bogie's wheelsets."""
+        return self.bogie_twist * (self.bogie_base_m or 0.0)
+
+    @property
+    def duration_s(self) -> float:
+        return self.ramp_s + self.hold_s
+
+    @property
+    def window(self) -> float:
+        """The final averaging window [s]."""
+        return self.window_s if self.window_s is not None else min(DEFAULT_WINDOW_S, self.hold_s)
+
+
+def parse(data, vehicle: VehicleParams, path: Path) -> TwistTest:
+    """The ``twist`` section, checked against the car (the bases of a bogie twist are the car's)
+    and for a plausible rail lift."""
+    twist = build(TwistTest, data, path, ["twist"])
+    for i, w in enumerate(twist.raised_wheels):
+        if w not in WHEELS:
+            raise ScenarioError(path, ["twist", f"raised_wheels[{i}]"], f"unknown wheel {w!r} (wheels: {', '.join(WHEELS)})")
+    if twist.window_s is not None and twist.window_s > twist.hold_s:
+        raise ScenarioError(path, ["twist", "window_s"], f"the final window must lie within the hold "
+                                                         f"(hold_s = {twist.hold_s:g} s), got {twist.window_s:g} s")
+    check_valve_settings(twist.valve_settings, path, ["twist", "valve_settings"])
+    if twist.bogie_twist_per_mille is not None and twist.bogie_base_m is None:
+        raise ScenarioError(path, ["twist", "bogie_twist_per_mille"], "a bogie twist needs its base: set bogie_base_m "
+                                                                      "(the wheelbase 2a+)")
+    if twist.bogie_base_m is not None:
+        # the rails are twisted about the real wheel positions: the bases must be the car's
+        for key, value, name, actual in (("bogie_base_m", twist.bogie_base_m, "vehicle.wheelbase_m", vehicle.wheelbase_m),
+                                         ("base_m", twist.base_m, "vehicle.bogie_centre_distance_m",
+                                          vehicle.bogie_centre_distance_m)):
+            if abs(value - actual) > 1e-9 * actual:
+                raise ScenarioError(path, ["twist", key], f"with a bogie twist the bases are the car's: expected "
+                                                          f"{name} = {actual:g} m, got {value:g} m")
+        side = twist.raised_wheels[0][-1] if twist.raised_wheels else ""
+        if sorted(twist.raised_wheels) != [f"1{side}", f"2{side}"]:
+            raise ScenarioError(path, ["twist", "raised_wheels"], "a bogie twist (bogie_base_m) twists one side of the "
+                                                                  "front bogie: expected [1R, 2R] or [1L, 2L], got "
+                                                                  f"{list(twist.raised_wheels)}")
+    # Plausible test height. The twist is bounded by MAX_TWIST_PER_MILLE; the lift
+    # of the highest rail, twist x base (+ half the bogie twist's height), by MAX_RAIL_LIFT_M.
+    # (The bellow stroke is deliberately not the bound: a bellow driven beyond its stroke is a
+    # legitimate study of divergence, which the runs diagnose.)
+    lift = twist.height_m + 0.5 * twist.bogie_height_m
+    if not lift <= MAX_RAIL_LIFT_M:
+        if twist.bogie_base_m is not None and twist.height_m <= MAX_RAIL_LIFT_M:   # the bogie twist tips it over
+            key = "bogie_twist_per_mille" if twist.bogie_twist_per_mille is not None else "bogie_base_m"
+        else:
+            key = "twist_per_mille" if twist.twist_per_mille is not None else "base_m"
+        raise ScenarioError(path, ["twist", key], f"the rails rise by {lift * 1e3:.0f} mm (twist {twist.twist * 1e3:g} "
+                                                  f"per mille x base {twist.base_m:g} m"
+                                                  + (f" + half the bogie twist's {twist.bogie_height_m * 1e3:.0f} mm"
+                                                     if twist.bogie_base_m is not None else "")
+                                                  + f"): expected at most {MAX_RAIL_LIFT_M * 1e3:.0f} mm, three times "
+                                                  f"the largest EN 14363 test height")
+    return twist
+
+
+def duration_s(test: TwistTest) -> float:
+    """How long a case runs [s]: the ramp and the hold."""
+    return test.duration_s
+
+
+def valve_settings(test: TwistTest, valves: bool) -> Tuple[bool, ...]:
+    """The valve settings the cases run with: ``twist.valve_settings``, else ``circuit.valves``."""
+    return test.valve_settings or (valves,)
+
+
+def make_car(scenario: Scenario):
+    """The car standing on rails that follow the twist (picklable factory for cosim.kinds.car)."""
+    from vehicle.car import MetroCar  # exudyn: imported when a car is built, not to read a scenario
+    return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=scenario.solver.mechanics_step_s,
+                    spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track)
+
+
+def run_settings(scenario: Scenario) -> Sequence[Optional[bool]]:
+    """The runs: each of ``twist.valve_settings``, or one (None) as ``circuit.valves`` says."""
+    return scenario.twist.valve_settings or (None,)
+
 
 #: wheels every twist plot shows (paper Fig. 8); the worst wheels of the run are added
 PLOT_WHEELS = ("1L", "1R", "4L", "4R")
@@ -77,22 +249,11 @@ def rail_heights(test: TwistTest):
     return twisted
 
 
-def make_car(scenario: Scenario) -> MetroCar:
-    """The car standing on rails that follow the twist (picklable factory for cosim.kinds.car)."""
-    return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=scenario.solver.mechanics_step_s,
-                    spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track)
-
-
-def valve_settings(scenario: Scenario) -> Sequence[Optional[bool]]:
-    """The runs: each of ``twist.valve_settings``, or one (None) as ``circuit.valves`` says."""
-    return scenario.twist.valve_settings or (None,)
-
-
 def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
     """Every case (k value x valve setting) of the twist scenario: the labelled time series (see
     :mod:`cosim.results.series`) with the wheel unloading ``dqq`` (ΔQ/Q0, time x wheel x case) added, and
     the divergence diagnoses."""
-    ds, diagnoses = simulate_cases(scenario, valve_settings(scenario), make_car, scenario.twist.duration_s, progress)
+    ds, diagnoses = simulate_cases(scenario, run_settings(scenario), make_car, scenario.twist.duration_s, progress)
     add_wheel_unloading(ds, column="dqq_{}")
     return ds, diagnoses
 
@@ -125,7 +286,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     bellow temperature range) and checkable metrics."""
     t0 = time.perf_counter()
     test = scenario.twist
-    settings = valve_settings(scenario)
+    settings = run_settings(scenario)
     bogie = (f" + bogie twist {test.bogie_twist * 1e3:g} permille over {test.bogie_base_m:g} m "
              f"({test.bogie_height_m * 1e3:.1f} mm across the front bogie)" if test.bogie_base_m is not None else "")
     valves_text = "" if settings == (None,) else f" x valves {['on' if v else 'off' for v in settings]}"
@@ -193,7 +354,7 @@ def figures(outcome: Outcome) -> List[Figure]:
     height = f"rail raised {test.height_m * 1e3:.0f} mm" + (
         f", bogie twisted {test.bogie_height_m * 1e3:.0f} mm" if test.bogie_base_m is not None else "")
     out = []
-    for setting in valve_settings(outcome.scenario):
+    for setting in run_settings(outcome.scenario):
         sub = of_setting(ds, setting)
         suffix = "" if setting is None else f"_valves={'on' if setting else 'off'}"
         valves = "" if setting is None else f", valves {'connected' if setting else 'isolated'}"
@@ -209,4 +370,38 @@ def figures(outcome: Outcome) -> List[Figure]:
     return out
 
 
-RUNNERS = {"twist": Runner(run, figures)}
+def record_headlines(scenario: Scenario, rec: Dict[str, np.ndarray], j: int = 0) -> Dict[str, object]:
+    """Headlines of case ``j`` of raw record arrays (``CoSimulation.run``'s or the monolithic
+    reference's: :mod:`cosim.verification.monolithic`): dqq_max (largest ΔQ/Q0 over wheels and
+    time) and ΔQ/Q0 at the last sample per wheel (Q0 from the first sample, level track)."""
+    Q = rec["wheel_load_N"][:, :, j]
+    dqq = wheel_unloading(Q, static_wheel_loads(Q[0]))
+    row: Dict[str, object] = {"dqq_max": float(dqq.max())}
+    row.update({f"dqq_end_{w}": float(dqq[-1, i]) for i, w in enumerate(WHEELS)})
+    return row
+
+
+def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+    """Overlay the wheel loads and ΔQ/Q0 of several twist runs (Fig. 8's wheels and the worst)."""
+    run_dirs = [d for d, _ in infos]
+    wheels = select.wheels or tuple(w for w in WHEELS if w in PLOT_WHEELS or w in worst_wheels(run_dirs))
+    written = []
+    for quantity, scale, unit in (("Q", 1e-3, "kN"), ("dqq", 1.0, "-")):
+        panels = []
+        for w in wheels:
+            column = f"{quantity}_{w}{'_N' if quantity == 'Q' else ''}"
+            curves = [Curve(data["t_s"], data[column] * scale, label(d, k))
+                      for d in run_dirs for k, data in case_series(d, "twist_", select)]
+            name = "wheel load Q" if quantity == "Q" else "ΔQ/Q0"
+            panels.append(Panel(curves, "time t [s]", f"{name} of wheel {w} [{unit}]", f"wheel {w}",
+                                hlines=[(DQQ_LIMIT, "EN 14363 limit")] if quantity == "dqq" else []))
+        written.append(save_panels(out_dir / f"compare_{quantity}.png", panels, f"Twist test comparison{window}", ncols=2))
+    return written
+
+
+KIND = Kind("twist", "twist", TwistTest, __name__, car=True,
+            check_metrics=("dqq_max", "dqq_qs_max", "dqq_drift"),
+            wheel_metrics=("dqq_max", "dqq_qs_max", "dqq_drift"),
+            # the dynamic and quasi-static unloading, largest and per wheel
+            headline_metrics=("dqq_max", "dqq_qs_max", *(f"dqq_max_{w}" for w in WHEELS), *(f"dqq_qs_{w}" for w in WHEELS)),
+            plot_metrics=("dqq_max", "dqq_qs_max"))

@@ -68,7 +68,7 @@ def flag_rows(rows: List[Dict[str, object]]) -> Dict[str, int]:
 
 def case_label(row: Mapping[str, object]) -> str:
     """``configuration bellow_tank, k = 1, 15 Hz`` ...: which case a summary row is."""
-    from cosim.results.io import k_label
+    from cosim.scenario.schema import k_label
     parts = []
     if "configuration" in row:
         parts.append(str(row["configuration"]))

@@ -8,9 +8,8 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
-from vehicle.params import BELLOWS, WHEELS
-
 from cosim.scenario.model import StateLimits
+from vehicle.params import BELLOWS, WHEELS
 
 _BODIES = ("carbody", "front bogie frame", "rear bogie frame")
 

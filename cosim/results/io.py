@@ -11,24 +11,29 @@ import time
 from contextlib import contextmanager
 from importlib import metadata
 from pathlib import Path
-from typing import Dict, Iterable, Mapping, Sequence
+from typing import Dict, Iterable, List, Mapping, Sequence
 
 import numpy as np
 
-from cosim.interrupts import stop_requested
+from cosim.scenario.schema import k_label
 
 
 @contextmanager
-def atomic_write(path: Path, mode: str = "w", **kwargs):
-    """Write ``path`` through a temporary file in the same folder, renamed over it only when
-    complete: a reader never sees half a file, and a failed write (disk full) leaves no cut
-    file behind (the error still propagates, with the file's name)."""
+def atomic_write(path: Path, mode: str = "w", durable: bool = False, **kwargs):
+    """Write ``path`` through a temporary file in the same folder (named by the process: several
+    processes may write the same file), renamed over it only when complete: a reader never sees
+    half a file, and a failed write (disk full) leaves no cut file behind (the error still
+    propagates, with the file's name). ``durable``: on disk before the rename (fsync), for a file
+    whose presence means work is done (a sweep case's marker)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         with tmp.open(mode, **kwargs) as fh:
             yield fh
+            if durable:
+                fh.flush()
+                os.fsync(fh.fileno())
         os.replace(tmp, path)
     except OSError as exc:
         tmp.unlink(missing_ok=True)
@@ -48,17 +53,24 @@ def write_columns(path: Path, columns: Mapping[str, Sequence[float]]) -> None:
         np.savetxt(fh, data, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
 
 
-def write_rows(path: Path, rows: Iterable[Mapping[str, object]]) -> None:
-    """A CSV with one row per mapping (header: every key that appears; missing cells are nan)."""
+def csv_rows(rows: Iterable[Mapping[str, object]]) -> List[Dict[str, str]]:
+    """The rows as a CSV of them holds them (:func:`write_rows`, read back by :func:`read_rows`):
+    every key that appears in any row, in first-seen order; each value as text (:func:`cell`),
+    a missing one ``nan``."""
     rows = list(rows)
+    header = list(dict.fromkeys(key for row in rows for key in row))
+    return [{k: ("" if row[k] is None else str(cell(row[k]))) if k in row else "nan" for k in header} for row in rows]
+
+
+def write_rows(path: Path, rows: Iterable[Mapping[str, object]]) -> None:
+    """A CSV with one row per mapping (:func:`csv_rows`)."""
+    rows = csv_rows(rows)
     with atomic_write(path, newline="") as fh:
         if not rows:
             return
-        header = list(dict.fromkeys(key for row in rows for key in row))   # union, in first-seen order
-        writer = csv.DictWriter(fh, fieldnames=header, restval="nan")
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
-        for row in rows:
-            writer.writerow({k: _fmt(v) for k, v in row.items()})
+        writer.writerows(rows)
 
 
 def read_rows(path: Path):
@@ -66,15 +78,11 @@ def read_rows(path: Path):
         return list(csv.DictReader(fh))
 
 
-def _fmt(v):
+def cell(v):
+    """A value as a CSV cell shows it: floats to 10 significant digits, inf, nan."""
     if isinstance(v, (float, np.floating)):
         return "inf" if math.isinf(v) else ("nan" if math.isnan(v) else f"{v:.10g}")
     return v
-
-
-def k_label(k: float) -> str:
-    """k for file names and legends: 0, 10, 1e+04, inf."""
-    return "inf" if math.isinf(k) else f"{k:g}"
 
 
 def versions() -> Dict[str, str]:
@@ -103,22 +111,27 @@ def source_commit() -> Dict[str, object]:
 
 
 def resolved_parameters(scenario) -> Dict[str, object]:
-    """Every parameter value the run used, defaults included: the scenario's typed sections."""
+    """Every parameter value the run used, defaults included: the scenario's typed sections (its
+    experiment under its section's name; the car's sections for a car scenario) and the circuit's
+    components."""
     import dataclasses
-    sections = ("rig", "test", "vehicle", "circuit", "twist", "curve", "solver", "verify")
-    out = {name: dataclasses.asdict(getattr(scenario, name)) for name in sections
-           if dataclasses.is_dataclass(getattr(scenario, name, None))}
-    if getattr(scenario, "circuit", None) is not None and scenario.circuit.explicit is None:
+    car = ("vehicle", "track", "solver", "verify", "state_limits") if scenario.vehicle is not None else ()
+    sections = {"circuit": scenario.circuit, scenario.section: scenario.experiment,
+                **{name: getattr(scenario, name) for name in car}}
+    out = {name: dataclasses.asdict(value) for name, value in sections.items() if dataclasses.is_dataclass(value)}
+    if scenario.circuit is not None and getattr(scenario.circuit, "explicit", None) is None:
         out["circuit_components"] = {n: {"type": type(c).__name__, **dataclasses.asdict(c)}
                                      for n, c in scenario.circuit.components().items()}
     out["checks"] = [c.text for c in scenario.checks]
     return out
 
 
-def write_run_json(out_dir: Path, scenario, wall_s: float, extra: Mapping[str, object] = ()) -> None:
+def write_run_json(out_dir: Path, scenario, wall_s: float, status: str = "complete",
+                   extra: Mapping[str, object] = ()) -> None:
     """Provenance: what ran (scenario file and every file it read, with their sha256, paths
     relative to the scenario file; overrides; every parameter value actually used), with which
-    versions and source commit, and how long it took. Strict JSON: non-finite numbers are
+    versions and source commit, how long it took and how it ended (``status``: complete or
+    interrupted). Strict JSON: non-finite numbers are
     written as the strings "inf", "-inf", "nan"."""
     info = {
         "scenario_file": str(scenario.file),
@@ -135,7 +148,7 @@ def write_run_json(out_dir: Path, scenario, wall_s: float, extra: Mapping[str, o
         "command": " ".join(sys.argv),
         "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "wall_time_s": round(wall_s, 3),
-        "status": "interrupted" if stop_requested() else "complete",
+        "status": status,
         **dict(extra),
     }
     with atomic_write(out_dir / "run.json") as fh:

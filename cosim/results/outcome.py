@@ -7,7 +7,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
-from cosim.limits.checks import CaseMetrics, Check, check_report, check_value, passes
+from cosim.limits.checks import CaseMetrics, check_report, check_value, passes
+from cosim.scenario.checks import Check
 from cosim.scenario.model import Scenario
 from cosim.limits.validity import failures
 
@@ -46,6 +47,9 @@ class Outcome:
         Further run facts for ``run.json`` (e.g. the twist height, the static wheel loads).
     wall_s : float
         Wall time of the computation [s].
+    interrupted : bool
+        The run was stopped by Ctrl-C or SIGTERM (:mod:`cosim.interrupts`): its results end
+        there (``run.json``: status ``interrupted``).
     """
 
     scenario: Scenario
@@ -58,6 +62,7 @@ class Outcome:
     warnings: List[str] = field(default_factory=list)
     info: Dict[str, object] = field(default_factory=dict)
     wall_s: float = 0.0
+    interrupted: bool = False
 
     @property
     def diverged(self) -> Optional[str]:
@@ -118,15 +123,6 @@ class Outcome:
             items.append({"name": "run completes", "status": "fail", "message": self.diverged})
         return {"scenario": str(self.scenario.file), "name": self.scenario.name, "kind": self.scenario.kind,
                 "status": "pass" if self.checks_hold() else "fail", "checks": items}
-
-
-@dataclass(frozen=True)
-class Runner:
-    """How one scenario kind runs: ``run(scenario, progress) -> Outcome`` computes (writes
-    nothing), ``figures(outcome) -> [cosim.results.plots.Figure]`` says what to draw."""
-
-    run: Callable[[Scenario, object], Outcome]
-    figures: Callable[[Outcome], list]
 
 
 def warn(found: List[str], message: str) -> None:

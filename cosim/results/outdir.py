@@ -14,7 +14,7 @@ import shutil
 from pathlib import Path
 from typing import Optional, Sequence
 
-from cosim.scenario.schema import ScenarioError
+from cosim.errors import ScenarioError
 
 LOCK = ".pneumorail.lock"
 INCOMPLETE = "INCOMPLETE"

@@ -5,11 +5,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List, Optional, Sequence, Tuple
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+
+def pyplot():
+    """matplotlib's pyplot on the Agg backend, imported when a figure is drawn (loading a
+    scenario, or running one without figures, does not need it)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
 
 
 @dataclass
@@ -65,6 +70,7 @@ def save_panels(path: Path, panels: Sequence[Panel], suptitle: Optional[str] = N
     nrows = -(-len(panels) // ncols)
     title_in = 0.2 * (suptitle.count("\n") + 1) + 0.1 if suptitle else 0.0   # room for the title lines [in]
     height_in = 3.6 * nrows + title_in
+    plt = pyplot()
     fig, axes = plt.subplots(nrows, ncols, figsize=(7.5 * ncols, height_in), squeeze=False)
     for ax, panel in zip(axes.ravel(), panels):
         for i, c in enumerate(panel.curves):

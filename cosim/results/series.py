@@ -16,39 +16,11 @@ import xarray as xr
 
 from vehicle.params import BELLOWS, WHEELS
 
-from cosim.results.io import k_label
+from cosim.master import OUTPUTS
+from cosim.scenario.schema import k_label
 
-#: record entry -> (dimensions after time, units, long name, CSV column pattern or None)
-CAR_VARIABLES = {
-    "wheel_load_N": (("wheel",), "N", "vertical wheel-rail force Q", "Q_{}_N"),
-    "crushing_m": (("bellow",), "m", "bellow crushing z (+ compression)", "z_{}_m"),
-    "bellow_force_N": (("bellow",), "N", "bellow force F", "F_bellow_{}_N"),
-    "bellow_p_Pa": (("bellow",), "Pa", "bellow pressure p (absolute)", "p_bellow_{}_Pa"),
-    "bellow_T_K": (("bellow",), "K", "bellow temperature T", "T_bellow_{}_K"),
-    "roll_rad": ((), "rad", "carbody roll (absolute, positive left side up)", "roll_carbody_rad"),
-    "air_from_supply_kg": ((), "kg", "air injected from the supply (cumulative)", "air_from_supply_kg"),
-    "air_to_atmosphere_kg": ((), "kg", "air exhausted to the atmosphere (cumulative)", "air_to_atmosphere_kg"),
-    "link_flow_kg_per_s": (("link",), "kg/s", "mass flow through each link, from its a node to its b node", None),
-    "total_mass_kg": ((), "kg", "air in all chambers", None),
-    "valve_supply_air_kg": (("valve",), "kg", "air through each levelling valve's supply side (cumulative)", None),
-    "valve_exhaust_air_kg": (("valve",), "kg", "air through each levelling valve's exhaust side (cumulative)", None),
-    "valve_supply_open_s": (("valve",), "s", "time each levelling valve's supply side was open (cumulative)", None),
-    "valve_exhaust_open_s": (("valve",), "s", "time each levelling valve's exhaust side was open (cumulative)", None),
-    # wheel-rail contact (guidance: contact only; a kinematic run has none of them)
-    "lateral_wheel_force_N": (("wheel",), "N", "lateral wheel-rail force Y (+ towards the track centre)", "Y_{}_N"),
-    "wheelset_lateral_force_N": (("wheelset",), "N", "sum of the lateral wheel forces of a wheelset, ΣY (+ left)",
-                                 "sumY_{}_N"),
-    "wheelset_lateral_m": (("wheelset",), "m", "wheelset lateral displacement from the design centre line (+ left)",
-                           "y_ws_{}_m"),
-    "wheelset_lateral_to_rails_m": (("wheelset",), "m", "wheelset lateral displacement relative to its rails "
-                                    "(+ left; track irregularities subtracted)", "y_ws_rails_{}_m"),
-    "angle_of_attack_rad": (("wheelset",), "rad", "wheelset angle of attack (yaw to the track tangent, + to the left)",
-                            "aoa_{}_rad"),
-    "flange_contact": (("wheel",), "1", "flange contact (1: contact angle above the flange threshold)", "flange_{}"),
-}
-
-#: wheelsets, 1 ... 4 from the front
-WHEELSETS = ("1", "2", "3", "4")
+#: wheelsets, "1" ... "4" from the front (from the car's wheel names)
+WHEELSETS = tuple(dict.fromkeys(wheel[:-1] for wheel in WHEELS))
 
 
 def case_name(k: float, valves: Optional[bool]) -> str:
@@ -65,11 +37,11 @@ def car_dataset(arrays: Dict[str, np.ndarray], ks: Sequence[float], valves: bool
     labels = {"wheel": list(WHEELS), "wheelset": list(WHEELSETS), "bellow": list(BELLOWS), "link": list(links),
               "valve": list(valve_names)}
     data = {}
-    for name, (dims, units, long_name, column) in CAR_VARIABLES.items():
-        if name not in arrays:
+    for o in OUTPUTS:                       # every sampled output, declared in cosim.master.OUTPUTS
+        if o.name not in arrays:
             continue
-        attrs = {"units": units, "long_name": long_name, **({"column": column} if column else {})}
-        data[name] = (("time", *dims, "case"), np.asarray(arrays[name], dtype=float), attrs)
+        attrs = {"units": o.unit, "long_name": o.long_name, **({"column": o.column} if o.column else {})}
+        data[o.name] = (("time", *o.dims, "case"), np.asarray(arrays[o.name], dtype=float), attrs)
     coords = {"time": ("time", np.asarray(arrays["t_s"], dtype=float), {"units": "s", "long_name": "time t"}),
               "case": [case_name(k, valves if named else None) for k in ks],
               "k_W_per_K": ("case", np.asarray(ks, dtype=float), {"units": "W/K", "long_name": "heat transfer coefficient k"}),

@@ -34,7 +34,7 @@ def write_outcome(outcome: Outcome, out: Path, figures: Sequence[Figure] = (), j
         figures = [dataclasses.replace(f, title="\n".join(filter(None, [f.title, textwrap.fill(note, 90 * f.ncols)])))
                    for f in figures]
     save_figures(out, figures, jobs)
-    write_run_json(out, outcome.scenario, outcome.wall_s,
+    write_run_json(out, outcome.scenario, outcome.wall_s, "interrupted" if outcome.interrupted else "complete",
                    {"diverged": outcome.diverged, "metrics": outcome.metrics, "warnings": outcome.warnings,
                     **outcome.info})
 

@@ -16,31 +16,11 @@ import dataclasses
 import math
 import re
 import typing
-from pathlib import Path
 from typing import Any, Dict, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
+from cosim.errors import ScenarioError
+
 _NUMBER_STRING = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)[eE][+-]?\d+$")
-
-
-class ScenarioError(ValueError):
-    """Bad input: which file, which key path, what was expected."""
-
-    def __init__(self, file: Union[str, Path, None], path: Sequence[str], message: str):
-        self.file = str(file) if file else "<scenario>"
-        self.path = ".".join(str(p) for p in path) or "(top level)"
-        self.reason = message
-        super().__init__(f"{self.file}: {self.path}: {message}")
-
-    def __reduce__(self):
-        """Picklable (an error raised in a worker process reaches the user unchanged)."""
-        return _scenario_error, (self.file, self.path, self.reason)
-
-
-def _scenario_error(file: str, path: str, reason: str) -> "ScenarioError":
-    error = ScenarioError(file, [], reason)
-    error.path = path
-    error.args = (f"{error.file}: {path}: {reason}",)
-    return error
 
 
 # ----------------------------------------------------------------------------------- ranges
@@ -90,73 +70,37 @@ def _num(v) -> str:
     return f"{v:g}"
 
 
-def _pos(unit: str = "", why: str = "") -> Range:
+def positive(unit: str = "", why: str = "") -> Range:
     return Range(0.0, None, False, True, unit, why)
 
 
-def _nonneg(unit: str = "", why: str = "") -> Range:
+def nonnegative(unit: str = "", why: str = "") -> Range:
     return Range(0.0, None, True, True, unit, why)
 
 
 #: Largest number of samples (time points) one series may hold: 1e6 rows of a few dozen columns
 #: are ~100 MB in memory; the shipped scenarios store at most 12 000.
 MAX_SAMPLES = 1_000_000
-#: Largest track twist [per mille] a twist test may apply: three times the largest EN 14363 limit
-#: (7 per mille, bases <= 4 m). Beyond it the "track" is no track: 100 per mille over a 10 m base
-#: raises the rails by 1 m. (The test height is bounded as well: cosim.scenario.load.MAX_RAIL_LIFT_M.)
-MAX_TWIST_PER_MILLE = 21.0
-#: Largest cant [rad]: 0.2 rad is 300 mm over the 1.5 m rail-centre distance; railway cant is
-#: limited to 150-200 mm (EN 13803: 180 mm, ~0.12 rad).
-MAX_CANT_RAD = 0.2
-#: Highest running speed [m/s]: 100 m/s = 360 km/h, beyond any metro and the wheel-rail model.
-MAX_SPEED_M_PER_S = 100.0
-
-_AMPLITUDE = Range(None, None, unit="m", why="a crushing amplitude; 0 moves nothing", nonzero=True)
-_TWIST = Range(0.0, MAX_TWIST_PER_MILLE, unit="per mille",
-               why="3 x the largest EN 14363 limit; 0: untwisted reference")
-
-#: ``Class.field`` -> allowed range; looked up along the class's MRO before the suffix rules.
+#: Most integration steps one run may take (macro-steps of a car run; the rig's integrator
+#: steps, bounded below by its largest step): 1e7 steps are hours of computing. The shipped
+#: scenarios take at most 120 000.
+MAX_STEPS = 10_000_000
+#: ``Class.field`` -> allowed range; looked up along the class's MRO before the suffix rules (a
+#: kind's experiment dataclass declares its own: ``FIELD_RANGES``).
 RANGES: Dict[str, Range] = {
     # pneumatic components
     "Bellow.dA_dz_m": Range(unit="m", why="change of effective area with crushing, either sign"),
-    "Pipe.length_m": _pos("m"),
-    "Pipe.diameter_m": _pos("m"),
-    "Pipe.friction_factor": _nonneg(why="Darcy friction factor lambda"),
-    "Pipe.zeta": _nonneg(why="pressure-loss coefficient of fittings"),
+    "Pipe.length_m": positive("m"),
+    "Pipe.diameter_m": positive("m"),
+    "Pipe.friction_factor": nonnegative(why="Darcy friction factor lambda"),
+    "Pipe.zeta": nonnegative(why="pressure-loss coefficient of fittings"),
     "Orifice.b_critical": Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio"),
     "LevellingValve.b_critical": Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio"),
-    "LevellingValve.lag_s": _nonneg("s", "0: no lag"),
-    "LevellingValve.delay_s": _nonneg("s", "0: no delay"),
-    "LevellingValve.hysteresis_m": _nonneg("m", "0: no play"),
+    "LevellingValve.lag_s": nonnegative("s", "0: no lag"),
+    "LevellingValve.delay_s": nonnegative("s", "0: no delay"),
+    "LevellingValve.hysteresis_m": nonnegative("m", "0: no play"),
     "LevellingValve.delay_stages": Range(1, 1000, why="first-order stages approximating the delay; "
                                                       "one state each"),
-    # rig tests
-    "RampTest.amplitude_m": _AMPLITUDE,
-    "RampTest.samples": Range(2, MAX_SAMPLES, why="stored time points"),
-    "SineTest.amplitude_m": _AMPLITUDE,
-    "SineTest.frequency_Hz": _pos("Hz"),
-    "SineTest.samples_per_period": Range(2, 10_000, why="stored time points per period"),
-    "SineTest.stable_drift_K_per_period": _pos("K per period"),
-    "StiffnessTest.amplitude_m": _AMPLITUDE,
-    "StiffnessTest.frequencies_Hz": _pos("Hz"),
-    "QuasiStaticTest.amplitude_m": _AMPLITUDE,
-    # car tests
-    "TwistTest.base_m": _pos("m", "the base length 2a*"),
-    "TwistTest.bogie_base_m": _pos("m", "the wheelbase 2a+"),
-    "TwistTest.twist_per_mille": _TWIST,
-    "TwistTest.bogie_twist_per_mille": _TWIST,
-    "TwistTest.settle_drift": _pos(why="a drift of dQ/Q0"),
-    "CurveTest.speed_m_per_s": Range(0.0, MAX_SPEED_M_PER_S, False, True, "m/s", "360 km/h at most"),
-    "CurveTest.straight_m": _pos("m"),
-    "CurveTest.transition_m": _pos("m"),
-    "CurveTest.radius_m": _pos("m"),
-    "CurveTest.arc_m": _pos("m"),
-    "CurveTest.cant_rad": Range(-MAX_CANT_RAD, MAX_CANT_RAD, unit="rad",
-                                why="0.2 rad = 300 mm over 1.5 m; railway cant is at most ~0.12 rad"),
-    "CurveTest.contact_damping_N_s_per_m": Range(0.0, 1e7, unit="N s/m",
-                                                  why="the shipped 2e5 stands in for the track's damping"),
-    "CurveTest.contact_smoothing_mm": Range(0.0, 1.0, unit="mm",
-                                            why="0: the rigid table; 1 mm blurs the flange itself"),
     "SolverSettings.jobs": Range(1, 256, why="worker processes"),
     "StateLimits.carbody_roll_rad": Range(0.0, 3.2, False, True, "rad", "a roll relative to the track plane"),
     "StateLimits.bogie_roll_rad": Range(0.0, 3.2, False, True, "rad", "a roll relative to the track plane"),
@@ -168,46 +112,46 @@ RANGES: Dict[str, Range] = {
     "VerifySettings.levels": Range(2, 6, why="halvings of every step; each doubles the cost of the last run"),
     # vehicle: every parameter is a mass, inertia, length, height above rail, stiffness, damping or
     # clearance, none negative (0: the component is absent); these cannot be 0 either
-    "VehicleParams.gravity_m_per_s2": _pos("m/s^2"),
-    "VehicleParams.bogie_centre_distance_m": _pos("m"),
-    "VehicleParams.wheelbase_m": _pos("m"),
-    "VehicleParams.contact_spacing_m": _pos("m"),
-    "VehicleParams.wheel_radius_m": _pos("m"),
-    "VehicleParams.primary_lateral_spacing_m": _pos("m"),
-    "VehicleParams.airspring_lateral_spacing_m": _pos("m"),
-    "VehicleParams.primary_stiffness_x_N_per_m": _pos("N/m"),
-    "VehicleParams.primary_stiffness_y_N_per_m": _pos("N/m"),
-    "VehicleParams.primary_stiffness_z_N_per_m": _pos("N/m"),
-    "VehicleParams.hertz_constant_N_per_m1_5": _pos("N/m^1.5"),
+    "VehicleParams.gravity_m_per_s2": positive("m/s^2"),
+    "VehicleParams.bogie_centre_distance_m": positive("m"),
+    "VehicleParams.wheelbase_m": positive("m"),
+    "VehicleParams.contact_spacing_m": positive("m"),
+    "VehicleParams.wheel_radius_m": positive("m"),
+    "VehicleParams.primary_lateral_spacing_m": positive("m"),
+    "VehicleParams.airspring_lateral_spacing_m": positive("m"),
+    "VehicleParams.primary_stiffness_x_N_per_m": positive("N/m"),
+    "VehicleParams.primary_stiffness_y_N_per_m": positive("N/m"),
+    "VehicleParams.primary_stiffness_z_N_per_m": positive("N/m"),
+    "VehicleParams.hertz_constant_N_per_m1_5": positive("N/m^1.5"),
 }
 
 #: Unit suffix -> range, for fields :data:`RANGES` does not name (longest suffix first):
 #: quantities that only make sense positive (pressures are absolute).
 SUFFIX_RANGES: Tuple[Tuple[str, Range], ...] = (
-    ("_kg_m2", _pos("kg m^2")),
-    ("_m3", _pos("m^3")), ("_m2", _pos("m^2")), ("_kg", _pos("kg")), ("_Pa", _pos("Pa absolute")),
-    ("_K", _pos("K")), ("_s", _pos("s")), ("_Hz", _pos("Hz")), ("_m3_per_sPa", _pos("m^3/(s Pa)")),
+    ("_kg_m2", positive("kg m^2")),
+    ("_m3", positive("m^3")), ("_m2", positive("m^2")), ("_kg", positive("kg")), ("_Pa", positive("Pa absolute")),
+    ("_K", positive("K")), ("_s", positive("s")), ("_Hz", positive("Hz")), ("_m3_per_sPa", positive("m^3/(s Pa)")),
 )
-#: Kept for callers of the former interface.
-POSITIVE_SUFFIXES = tuple(s for s, _ in SUFFIX_RANGES)
 
 #: Class -> range of every other number of that class.
 CLASS_RANGES: Dict[str, Range] = {
-    "VehicleParams": _nonneg(why="a vehicle parameter; 0: the component is absent"),
-    "TrackStructure": _pos(why="a flexible track's mass, stiffness or damping"),
+    "VehicleParams": nonnegative(why="a vehicle parameter; 0: the component is absent"),
+    "TrackStructure": positive(why="a flexible track's mass, stiffness or damping"),
 }
 
 #: ``Class.field`` of list fields -> (must be non-empty, must hold no duplicates).
 LIST_RULES: Dict[str, Tuple[bool, bool]] = {
-    "StiffnessTest.frequencies_Hz": (True, True),
-    "RampTest.configurations": (True, True),
-    "TwistTest.raised_wheels": (True, True),
-}   # valve_settings: cosim.scenario.load._valve_settings
+}   # valve settings: check_valve_settings; a kind's experiment declares its own (FIELD_LIST_RULES)
 
 
-def _lookup(table: Mapping[str, Any], cls, name: str):
+def _lookup(table: Mapping[str, Any], cls, name: str, attribute: str = "FIELD_RANGES"):
+    """The rule of field ``name`` of ``cls``: from the class's own ``attribute`` (a mapping a kind's
+    experiment dataclass declares, e.g. ``FIELD_RANGES = {"base_m": ...}``), else from ``table``
+    (``Class.field``), along the MRO."""
     for klass in getattr(cls, "__mro__", ()):
-        rule = table.get(f"{klass.__name__}.{name}")
+        rule = vars(klass).get(attribute, {}).get(name)
+        if rule is None:
+            rule = table.get(f"{klass.__name__}.{name}")
         if rule is not None:
             return rule
     return None
@@ -345,7 +289,7 @@ def build(cls, data: Any, file, path: Sequence[str], **fixed):
         if isinstance(value, tuple):
             for i, v in enumerate(value):
                 check_range(v, rule, file, _item_path(where, i))
-            check_list(value, _lookup(LIST_RULES, cls, name), file, where)
+            check_list(value, _lookup(LIST_RULES, cls, name, "FIELD_LIST_RULES"), file, where)
         elif isinstance(value, float) and math.isinf(value):      # only where the default is .inf
             if value != f.default:
                 raise ScenarioError(file, where, f"expected a finite number or .inf, got {value}")
@@ -411,3 +355,19 @@ def k_values(value: Any, file, path: Sequence[str]) -> Tuple[float, ...]:
     if not out:
         raise ScenarioError(file, path, "expected at least one k value, got an empty list")
     return tuple(out)
+
+
+def check_valve_settings(settings, path, where) -> None:
+    """A list of valve settings (false: valves isolated, true: connected): each at most once, not
+    empty; None: one run as ``circuit.valves`` says."""
+    if settings is None:
+        return
+    if not settings:
+        raise ScenarioError(path, where, "expected at least one setting (false: valves isolated, true: connected)")
+    if len(set(settings)) != len(settings):
+        raise ScenarioError(path, where, f"each setting at most once, got {list(settings)}")
+
+
+def k_label(k: float) -> str:
+    """k for file names and legends: 0, 10, 1e+04, inf."""
+    return "inf" if math.isinf(k) else f"{k:g}"

@@ -22,7 +22,7 @@ from typing import Any, List, Sequence, Tuple
 
 import yaml
 
-from cosim.scenario.schema import ScenarioError
+from cosim.errors import ScenarioError
 
 #: Largest scenario or parameter file read [bytes]; the shipped ones are 1-4 kB.
 MAX_BYTES = 256 * 1024

@@ -23,13 +23,11 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator, Optional, Sequence, Tuple
 
+from cosim.errors import ExecutorUnavailable
+
 Task = Tuple[str, Sequence[Any]]
 
 DASK_INSTALL_HINT = "pip install -e \".[dask]\" (or: pip install \"dask[distributed]\" h5netcdf)"
-
-
-class ExecutorUnavailable(RuntimeError):
-    """The executor asked for cannot be used here (e.g. Dask is not installed)."""
 
 
 @dataclass

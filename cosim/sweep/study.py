@@ -26,7 +26,6 @@ import hashlib
 import itertools
 import json
 import math
-import os
 import shutil
 import sys
 import time
@@ -37,16 +36,16 @@ from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
 import yaml
 
-from cosim.results.io import Progress, k_label, read_rows, write_rows
-from cosim.scenario.schema import ScenarioError, k_values
+from cosim.errors import ScenarioError
+from cosim.kinds import KINDS
+from cosim.results.io import Progress, atomic_write, csv_rows, write_rows
+from cosim.results.plots import pyplot
+from cosim.scenario.schema import k_label, k_values
 
 DONE, FAILED = "done.json", "failed.json"
 K_KEY = "k_W_per_K"
 #: identity columns of a summary row (besides the grid values)
 ROW_CASE_COLUMNS = ("valves", "k_W_per_K")
-#: metrics plotted against the grid keys
-PLOT_METRICS = {"twist": ("dqq_max", "dqq_qs_max"),
-                "curve_entry": ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg")}
 SWEEP_KEYS = ("scenario", "grid", "zip", "set", "k_W_per_K", "name")
 
 
@@ -143,7 +142,7 @@ def load_sweep_file(path: Path) -> SweepSpec:
     """A sweep file: a ``sweep:`` section (its keys may also stand at the top level) with
     ``scenario`` (relative to the sweep file), ``grid``, optional ``zip``, ``set`` (base
     overrides: a mapping of key paths to values) and ``k_W_per_K`` (base k values)."""
-    from cosim.scenario.load import load_yaml
+    from cosim.load import load_yaml
     path = Path(path)
     data, _ = load_yaml(path)
     if not isinstance(data, dict):
@@ -185,7 +184,7 @@ def load_sweep_file(path: Path) -> SweepSpec:
 
 def is_sweep_file(path: Path) -> bool:
     """Whether ``path`` holds a sweep (a ``sweep:`` section, or ``scenario:`` + ``grid:``)."""
-    from cosim.scenario.load import load_yaml
+    from cosim.load import load_yaml
     try:
         data, _ = load_yaml(Path(path))
     except ScenarioError:                   # unreadable, not text, hostile YAML: the caller says why
@@ -259,18 +258,16 @@ class Prepared:
 def prepare(spec: SweepSpec, check: bool = False) -> Prepared:
     """Expand and validate every case (``load_scenario``) before anything runs; bad input is a
     :class:`ScenarioError` naming the file and the key path."""
-    from cosim.limits.checks import CHECK_METRICS
-    from cosim.scenario.load import load_scenario
+    from cosim.load import load_scenario
+    from cosim.scenario.checks import checks_hint
     if not spec.grid and not spec.zip:
         raise ScenarioError(spec.source or spec.scenario_file, [spec.where[0]],
                             "nothing to sweep: give at least one grid key (KEY=V1,V2,...)")
     base_strings = [f"{k}={value_text(v)}" for k, v in spec.base.items()]
     base = load_scenario(spec.scenario_file, base_strings, spec.base_k)
     if check and not base.checks:
-        metrics = CHECK_METRICS.get(base.kind)
-        hint = (f"add e.g. checks: ['{metrics[0]} <= ...'] (metrics: {', '.join(metrics)})" if metrics
-                else f"{base.kind} scenarios have no checkable metrics")
-        raise ScenarioError(base.file, ["checks"], f"no checks to evaluate in the sweep's cases: {hint}")
+        raise ScenarioError(base.file, ["checks"], f"no checks to evaluate in the sweep's cases: "
+                                                   f"{checks_hint(KINDS[base.kind])}")
     cases = expand(spec)
     out, scenarios = [], {}
     for case in cases:
@@ -301,8 +298,7 @@ def _blame(exc: ScenarioError, case: Case) -> Tuple[str, Any]:
 
 def _one_process(scenario):
     """Cases are the unit of parallelism: each car scenario runs its k values in one process."""
-    from cosim.scenario.load import CAR_KINDS
-    if scenario.kind in CAR_KINDS and scenario.solver.jobs != 1:
+    if KINDS[scenario.kind].car and scenario.solver.jobs != 1:
         scenario = dataclasses.replace(scenario, solver=dataclasses.replace(scenario.solver, jobs=1))
     return scenario
 
@@ -336,7 +332,7 @@ def run_case(scenario, case_dir: str, record: Dict[str, Any]) -> Dict[str, Any]:
     t0 = time.perf_counter()
     try:
         outcome = _run_scenario(scenario, folder)
-        rows = read_rows(folder / "summary.csv") if (folder / "summary.csv").exists() else []
+        rows = csv_rows(outcome.rows)       # as its summary.csv holds them
     except Exception as exc:                # noqa: BLE001 -- recorded; the sweep goes on
         result = {**record, "status": "failed", "diagnosis": f"{type(exc).__name__}: {exc}".strip(),
                   "traceback": traceback.format_exc(), "rows": [], "metrics": [],
@@ -351,12 +347,9 @@ def run_case(scenario, case_dir: str, record: Dict[str, Any]) -> Dict[str, Any]:
 
 
 def write_json_atomic(path: Path, data: Mapping[str, Any]) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with tmp.open("w") as fh:
+    """``data`` as JSON, written whole and on disk before it appears (a case's marker)."""
+    with atomic_write(path, durable=True) as fh:
         json.dump(data, fh, indent=1)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
 
 
 def _num(v: float):
@@ -450,18 +443,15 @@ class SweepOutcome:
 
 
 class SweepProgress:
-    """One line per finished case on stderr: done / total, running, failed, elapsed, ETA."""
+    """One line per finished case on stderr (through the runs' own :class:`Progress`): done /
+    total, running, failed, ETA."""
 
     def __init__(self, total: int, skipped: int, quiet: bool = False, stream=None):
-        self.total, self.skipped, self.quiet = total, skipped, quiet
-        self.stream = stream or sys.stderr
-        self.t0 = time.perf_counter()
+        self.total, self.skipped = total, skipped
+        self.say = Progress("sweep", stream, quiet=quiet)
+        self.t0 = self.say.t0
         self.finished = 0
         self.failed = 0
-
-    def say(self, message: str) -> None:
-        if not self.quiet:
-            print(f"[sweep {_clock(time.perf_counter() - self.t0)}] {message}", file=self.stream, flush=True)
 
     def case_done(self, case: Case, record: Dict[str, Any], running: int) -> None:
         self.finished += 1
@@ -610,7 +600,7 @@ def _numeric_column(rows, col) -> bool:
 
 def write_netcdf(outcome: SweepOutcome) -> List[str]:
     """sweep.nc: every numeric summary metric over (grid keys..., first zip key, k, valves)."""
-    import pandas as pd                     # comes with xarray
+    import pandas as pd  # comes with xarray
     rows = table_rows(outcome)
     if not rows:
         return []
@@ -667,7 +657,7 @@ def write_plots(outcome: SweepOutcome) -> List[str]:
     keys, ``sweep_<metric>_heatmap.png``: the metric over both, a panel per (valves, k)."""
     from cosim.results.plots import Curve, Panel, k_legend, save_panels
     prepared = outcome.prepared
-    metrics = PLOT_METRICS.get(prepared.base.kind, ())
+    metrics = KINDS[prepared.base.kind].plot_metrics
     rows = [r for r in table_rows(outcome) if r["status"] in ("ok", "diverged")]
     keys = [k for k in prepared.spec.grid if k != K_KEY and _numeric_column(rows, k)] if rows else []
     if not rows or not keys or not metrics:
@@ -701,7 +691,7 @@ def write_plots(outcome: SweepOutcome) -> List[str]:
 
 
 def _heatmap(path: Path, rows, metric, xkey, ykey, valves, ks, title, fixed) -> None:
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     import numpy as np
     xs = sorted({r[xkey] for r in rows})
     ys = sorted({r[ykey] for r in rows})

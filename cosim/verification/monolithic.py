@@ -1,7 +1,7 @@
-"""A monolithic reference for the co-simulation (issue 7, item 4): the car and its pneumatic
-circuit integrated together, inside exudyn, by one integrator with one step.
+"""A monolithic reference for the co-simulation: the car and its pneumatic circuit integrated
+together, inside exudyn, by one integrator with one step.
 
-Model. The car is the co-simulation's own (``cosim.kinds.twist.make_car`` / ``cosim.kinds.curve_entry.make_car``,
+Model. The car is the co-simulation's own (its kind's ``make_car``, e.g. ``cosim.kinds.twist.make_car``,
 built, with the circuit and its initial state, by :func:`cosim.kinds.car.build_cosimulation`), with
 two changes:
 
@@ -71,14 +71,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Callable, Dict, Optional
+from typing import Callable, Optional
 
 import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import NodeGenericODE1, ObjectGenericODE1
 
 from cosim.kinds.car import build_cosimulation
-from cosim.limits.criteria import static_wheel_loads, wheel_unloading, window_mean
 from cosim.master import Record
 from cosim.scenario.model import Scenario
 
@@ -93,13 +92,12 @@ STATE_SCALE = {"m": 1e-6, "T": 1e-3, "q": 1e-6, "mass_through": 1e-6, "energy": 
 
 
 def _make_car(scenario: Scenario):
-    if scenario.kind == "twist":
-        from cosim.kinds.twist import make_car
-    elif scenario.kind == "curve_entry":
-        from cosim.kinds.curve_entry import make_car
-    else:
-        raise ValueError(f"the monolithic reference runs twist and curve_entry scenarios, not {scenario.kind!r}")
-    return make_car
+    """The car factory of the scenario's kind (a car kind: :mod:`cosim.kinds`)."""
+    from cosim.kinds import KINDS
+    kind = KINDS[scenario.kind]
+    if not kind.car:
+        raise ValueError(f"the monolithic reference runs car scenarios, not {scenario.kind!r}")
+    return kind.code.make_car
 
 
 def state_scale(circuit) -> np.ndarray:
@@ -118,14 +116,9 @@ def state_scale(circuit) -> np.ndarray:
 
 class MonolithicRecord(Record):
     """The co-simulation's :class:`~cosim.master.Record` (one case), plus ``monolithic``: the
-    :class:`MonolithicCar` that produced it (statistics, wall time), left out of :meth:`arrays`."""
+    :class:`MonolithicCar` that produced it (statistics, wall time)."""
 
     monolithic: Optional["MonolithicCar"] = None
-
-    def arrays(self) -> Dict[str, np.ndarray]:
-        arrays = super().arrays()
-        arrays.pop("monolithic", None)
-        return arrays
 
 
 @dataclass
@@ -329,7 +322,7 @@ class MonolithicCar:
 
 def run_monolithic(scenario: Scenario, k: float, duration_s: float, step_s: float,
                    output_interval_s: Optional[float] = None, **options) -> MonolithicRecord:
-    """The car of ``scenario`` (twist or curve_entry; for the curve with the valves connected pass
+    """The car of ``scenario`` (a car kind; for the curve with the valves connected pass
     ``scenario.with_valves(True)``) and its circuit for one ``k``, integrated
     monolithically with the fixed step ``step_s`` for ``duration_s``: the co-simulation's record
     (one case; ``record.arrays()`` as ``CoSimulation.run`` gives it), with ``record.monolithic``
@@ -339,29 +332,3 @@ def run_monolithic(scenario: Scenario, k: float, duration_s: float, step_s: floa
     record = car.run(duration_s, output_interval_s or scenario.solver.output_interval_s)
     record.monolithic = car
     return record
-
-
-# -------------------------------------------------------------------- headline metrics
-def twist_headlines(rec: Dict[str, np.ndarray], j: int = 0) -> Dict[str, object]:
-    """Twist headlines of case ``j`` of record arrays: dqq_max (largest ΔQ/Q0 over wheels and
-    time) and ΔQ/Q0 at the last sample per wheel (Q0 from the first sample, level track)."""
-    from vehicle.car import WHEELS
-    Q = rec["wheel_load_N"][:, :, j]
-    dqq = wheel_unloading(Q, static_wheel_loads(Q[0]))
-    row = {"dqq_max": float(dqq.max())}
-    row.update({f"dqq_end_{w}": float(dqq[-1, i]) for i, w in enumerate(WHEELS)})
-    return row
-
-
-def curve_headlines(scenario: Scenario, rec: Dict[str, np.ndarray], j: int = 0,
-                    window_s: Optional[float] = None) -> Dict[str, float]:
-    """Curve headlines of case ``j``: largest |roll| relative to the track plane, its mean over the
-    final window (``window_s``, default the scenario's), air injected and exhausted [kg]."""
-    from cosim.kinds.curve_entry import track_roll_rad
-    t = np.asarray(rec["t_s"])
-    roll = rec["roll_rad"][:, j] - track_roll_rad(scenario, t)
-    w = window_s if window_s is not None else scenario.curve.window
-    return {"roll_max_rad": float(np.abs(roll).max()),
-            "roll_mean_end_rad": float(window_mean(t, roll, min(w, t[-1] - t[0]))),
-            "air_injected_kg": float(rec["air_from_supply_kg"][-1, j]),
-            "air_exhausted_kg": float(rec["air_to_atmosphere_kg"][-1, j])}

@@ -38,8 +38,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from cosim.results.io import Progress, atomic_write, jsonable, read_rows, write_rows
+from cosim.results.io import Progress, atomic_write, cell, jsonable, write_rows
 from cosim.scenario.model import Scenario
+from vehicle.params import WHEELS
 
 #: Differences between levels below this fraction of the scale S count as converged: they are
 #: 1/50 of the default tolerance, below anything a result is judged by (no order is reported).
@@ -51,21 +52,8 @@ ORDER_MIN, ORDER_MAX = 0.5, 4.0
 #: (suffix, reference column of the case's summary row or None for 1, fraction of it).
 FLOORS = (("_kg", "air_initial_kg", 1e-3), ("_rad", "roll_max_rad", 0.1), ("_N", "Q0_N", 0.01), ("", None, 0.01))
 
-#: Headline metrics per scenario kind (summary columns); a column that is absent is skipped.
-HEADLINE_METRICS = {
-    "twist": ("dqq_max", "dqq_qs_max", "dqq_max_1L", "dqq_max_1R", "dqq_max_2L", "dqq_max_2R",
-              "dqq_max_3L", "dqq_max_3R", "dqq_max_4L", "dqq_max_4R",
-              "dqq_qs_1L", "dqq_qs_1R", "dqq_qs_2L", "dqq_qs_2R", "dqq_qs_3L", "dqq_qs_3R",
-              "dqq_qs_4L", "dqq_qs_4R"),
-    # the processed quantities an engineer is judged by: EN 14363's 2 m sliding means, the roll
-    # (largest, and its mean over the final window), the air; not the raw sampled peaks of
-    # ΔQ/Q0 and Y (dqq_max, Y_max_N: one sample of a transient the step may not resolve)
-    "curve_entry": ("roll_max_rad", "roll_end_rad", "roll_mean_end_rad", "air_injected_kg",
-                    "air_exhausted_kg", "dqq_2m_max",
-                    # with wheel-rail contact (absent with kinematic guidance)
-                    "yq_max", "sum_y_max_N"),
-}
-WHEEL_NAMES = ("1L", "1R", "2L", "2R", "3L", "3R", "4L", "4R")
+#: the steps each level divides by two
+STEPS = ("macro_step_s", "mechanics_step_s", "pneumatic_step_s")
 #: Columns that identify a case in a summary row.
 CASE_COLUMNS = ("valves", "k_W_per_K")
 
@@ -122,20 +110,19 @@ def richardson(values: Sequence[float], metric: str = "", case: str = "", floor:
 def refined(scenario: Scenario, level: int) -> Scenario:
     """The scenario with every step divided by 2**level."""
     s, factor = scenario.solver, 2.0 ** -level
-    solver = dataclasses.replace(s, macro_step_s=s.macro_step_s * factor,
-                                 mechanics_step_s=s.mechanics_step_s * factor,
-                                 pneumatic_step_s=s.pneumatic_step_s * factor)
+    solver = dataclasses.replace(s, **{step: getattr(s, step) * factor for step in STEPS})
     return dataclasses.replace(scenario, solver=solver)
 
 
-def _case(row: Dict[str, str]) -> str:
-    return ", ".join(f"{c}={row[c]}" for c in CASE_COLUMNS if c in row)
+def _case(row: Dict[str, object]) -> str:
+    """The case of a summary row as its CSV shows it (``valves=True, k_W_per_K=inf``)."""
+    return ", ".join(f"{c}={cell(row[c])}" for c in CASE_COLUMNS if c in row)
 
 
 def _family(metric: str) -> str:
     """``dqq_qs_3R`` -> ``dqq_qs``: per-wheel metrics share one scale."""
     head, _, tail = metric.rpartition("_")
-    return head if tail in WHEEL_NAMES else metric
+    return head if tail in WHEELS else metric
 
 
 def floor_of(metric: str, row: Dict[str, str]) -> float:
@@ -170,28 +157,29 @@ def estimates(rows_per_level: Sequence[List[Dict[str, str]]], metrics: Sequence[
 
 
 def verify(scenario: Scenario, out: Path, levels: int, progress: Progress) -> Tuple[List[Estimate], Optional[str]]:
-    """Run the levels into ``out/level_<i>``; write ``verify.csv`` and add the estimates to level
-    0's ``run.json``. Returns the estimates and the diagnoses of diverged runs."""
+    """Run the levels into ``out/level_<i>`` (each an output folder of its own) and estimate the
+    error from their summary rows (in memory); write ``verify.csv`` and ``verify.json`` (the
+    levels' steps, the tolerance and the estimates). Returns the estimates and the diagnoses of
+    diverged runs."""
+    from cosim.kinds import KINDS
     from cosim.runner import run_scenario
-    rows, diverged = [], []
+    rows, diverged, steps = [], [], []
     for level in range(levels + 1):
         variant = refined(scenario, level)
         s = variant.solver
         progress(f"level {level}: macro-step {s.macro_step_s:g} s, multibody {s.mechanics_step_s:g} s, "
                  f"pneumatic {s.pneumatic_step_s:g} s")
-        folder = out / f"level_{level}"
-        outcome = run_scenario(variant, folder, progress)
+        outcome = run_scenario(variant, out / f"level_{level}", progress)
         if outcome.diverged:
             diverged.append(f"level {level}: {outcome.diverged}")
-        rows.append(read_rows(folder / "summary.csv"))
-    metrics = HEADLINE_METRICS.get(scenario.kind, ())
-    found = estimates(rows, metrics)
+        rows.append(outcome.rows)
+        steps.append({"level": level, "folder": f"level_{level}", **{k: getattr(s, k) for k in STEPS}})
+    found = estimates(rows, KINDS[scenario.kind].headline_metrics)
     write_rows(out / "verify.csv", [e.row() for e in found])
-    run_json = out / "level_0" / "run.json"
-    info = json.loads(run_json.read_text())
-    info["verify"] = {"levels": levels, "tolerance": scenario.verify.tolerance,
-                      "estimates": [e.row() for e in found]}
-    with atomic_write(run_json) as fh:
+    info = {"scenario_file": str(scenario.file), "name": scenario.name, "kind": scenario.kind,
+            "tolerance": scenario.verify.tolerance, "levels": steps, "diverged": diverged,
+            "estimates": [e.row() for e in found]}
+    with atomic_write(out / "verify.json") as fh:
         fh.write(json.dumps(jsonable(info), indent=2, allow_nan=False) + "\n")
     return found, "; ".join(diverged) or None
 
