@@ -1,16 +1,17 @@
-"""A bellow's effective area given as a table of crushing (issue 10): the force and the stiffness
+"""A bellow's effective area given as a table of crushing: the force and the stiffness
 the coupling uses follow the table; a table that restates the linear law changes nothing."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from cosim.scenario.load import load_scenario
-from cosim.scenario.schema import ScenarioError
-from helpers import SCENARIOS
+from cosim.errors import ScenarioError
+from cosim.load import load_scenario
 from pneumatics.chamber import Bellow
 from pneumatics.circuit import Circuit, CircuitError
 from pneumatics.rig import ramp_motion, run_time_series
+
+from helpers import SCENARIOS
 
 P0_PA = 4.0e5
 TABLE = dict(area_table_z_m=(-0.06, -0.02, 0.0, 0.03, 0.08), area_table_m2=(0.118, 0.126, 0.13, 0.138, 0.16))

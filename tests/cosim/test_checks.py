@@ -8,13 +8,15 @@ import numpy as np
 import pytest
 import yaml
 
+from cosim.errors import ScenarioError
+from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import window_drift, window_mean
-from cosim.limits.checks import CaseMetrics, Check
+from cosim.load import load_scenario
 from cosim.results.outcome import Outcome
-from cosim.scenario.load import load_scenario
-from cosim.scenario.schema import ScenarioError
-from helpers import SCENARIOS, short_twist, write_scenario
+from cosim.scenario.checks import Check
 from vehicle.car import WHEELS
+
+from helpers import SCENARIOS, short_twist, write_scenario
 
 
 # ----------------------------------------------------------------------------- window statistics

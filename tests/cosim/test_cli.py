@@ -8,8 +8,9 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from cosim import cli
+from cosim.limits.validity import PIPE_MACH_MAX, T_RANGE_K, failures, flag_rows
 from cosim.results.plots import curve_style
-from cosim.limits.validity import PIPE_MACH_MAX, T_RANGE_K, flag_rows, failures
+
 from helpers import SCENARIOS, short_twist, write_scenario
 
 
@@ -48,6 +49,7 @@ def test_options_that_do_not_apply_are_refused(argv, key, capsys, tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_check_writes_a_json_and_junit_verdict(tmp_path, capsys):
     # two checks: one holds, one cannot (ΔQ/Q0 >= 0.5 on a 2 s twist that unloads < 0.1)
     path = write_scenario(tmp_path, short_twist(k_W_per_K=[0], checks=["dqq_max <= 0.6", "dqq_max[3R] >= 0.5"]))
@@ -74,6 +76,7 @@ def test_validity_flags():
     assert failures(rows, allowed=("temperature",)) == ["k = 1: pipe_mach", "k = 3: unstabilised"]
 
 
+@pytest.mark.slow
 def test_a_run_outside_validity_is_flagged_and_fails_check(tmp_path, capsys):
     # the 15 Hz sine with k = 1 near the pipe resonance: a thermal runaway (paper §3)
     out = tmp_path / "out"
@@ -94,7 +97,8 @@ def test_every_curve_of_a_panel_looks_different():
 def test_errors_raised_in_workers_survive_pickling():
     # a worker's exception crosses the process boundary by pickle: it must arrive as itself
     import pickle
-    from cosim.scenario.schema import ScenarioError
+
+    from cosim.errors import ScenarioError
     from pneumatics.circuit import CircuitDiverged, CircuitError
     for error in (ScenarioError("s.yaml", ["circuit", "tank", "V_m3"], "must be > 0"),
                   CircuitError(["tank_FL", "p0_Pa"], "initial pressure is not set"),
@@ -106,8 +110,9 @@ def test_errors_raised_in_workers_survive_pickling():
 
 def test_allowed_validity_flags_do_not_fail_check():
     import dataclasses
+
+    from cosim.load import load_scenario
     from cosim.results.outcome import Outcome
-    from cosim.scenario.load import load_scenario
     # no limits: the validity flag alone decides (with the scenario's dqq_max check and no
     # cases, the check's NaN value would fail it whatever the flags)
     s = dataclasses.replace(load_scenario(SCENARIOS / "twist_dqq.yaml"), checks=())
@@ -121,6 +126,6 @@ def test_allowed_validity_flags_do_not_fail_check():
 
 def test_an_explicit_circuits_valve_label_is_what_it_contains(tmp_path):
     # the throttled-tank example has no levelling valve: its runs are labelled valves off
-    from cosim.scenario.load import load_scenario
+    from cosim.load import load_scenario
     s = load_scenario(SCENARIOS / "twist_throttled_tanks.yaml")
     assert s.circuit.valves is False and s.twist.valve_settings == (False,)

@@ -3,21 +3,21 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
-from pathlib import Path
 
+import exudyn
 import numpy as np
 import pytest
-import exudyn
 
-from cosim.kinds.car import build_cosimulation
 from cosim.cli import main
-from cosim.runner import run
-from cosim.scenario.load import load_scenario
+from cosim.kinds.car import build_cosimulation
 from cosim.kinds.twist import make_car as twist_car
+from cosim.load import load_scenario
+from cosim.runner import run
 from cosim.verification.verify import estimates, floor_of, richardson
 
-SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+from helpers import SCENARIOS
 
 
 def _applied_forces(car) -> np.ndarray:
@@ -33,7 +33,7 @@ def _twist_ramp_forces(H: float):
     scenario = load_scenario(SCENARIOS / "twist_dqq.yaml", k_override=[0.0],
                              overrides=[f"solver.macro_step_s={H}", f"solver.mechanics_step_s={H}",
                                         f"solver.pneumatic_step_s={H}"])
-    scenario = dataclasses.replace(scenario, twist=dataclasses.replace(scenario.twist, ramp_s=1.0))
+    scenario = scenario.with_experiment(ramp_s=1.0)
     cosim = build_cosimulation(scenario, scenario.k_W_per_K, twist_car)
     car = cosim.cars[0]
     at_start = []
@@ -67,6 +67,7 @@ def test_force_felt_by_the_car_is_continuous_across_macro_steps():
     assert 3.5 < drift / drift_half < 4.5
 
 
+@pytest.mark.slow
 def test_short_curve_air_injected_is_converged_at_the_default_steps():
     # Valves connected, k = 0, a 5 s entry (12 m straight, 15 m transition, into the arc):
     # halving every step (macro, multibody, pneumatic) changes the air injected by less than
@@ -80,7 +81,7 @@ def test_short_curve_air_injected_is_converged_at_the_default_steps():
         variant = dataclasses.replace(scenario, solver=dataclasses.replace(
             s, macro_step_s=s.macro_step_s * factor, mechanics_step_s=s.mechanics_step_s * factor,
             pneumatic_step_s=s.pneumatic_step_s * factor))
-        outcome = run(dataclasses.replace(variant, curve=dataclasses.replace(variant.curve, valve_settings=(True,))))
+        outcome = run(variant.with_experiment(valve_settings=(True,)))
         assert not outcome.diagnoses
         air.append(outcome.rows[0]["air_injected_kg"])
     assert air[0] > 1e-4                              # the valves do inject air (not vacuous)
@@ -145,6 +146,7 @@ SHORT_TWIST = ["--k", "0", "--set", "twist.ramp_s=0.5", "--set", "twist.hold_s=0
                "--quiet"]
 
 
+@pytest.mark.slow
 def test_verify_exit_codes(tmp_path, capsys):
     # a 1 s twist is still swaying (not asymptotic): a loose tolerance passes, a strict one fails
     twist = str(SCENARIOS / "twist_dqq.yaml")
@@ -152,7 +154,10 @@ def test_verify_exit_codes(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "dqq_max" in out and "Richardson" in out
     assert (tmp_path / "ok" / "verify.csv").exists()
-    assert "verify" in (tmp_path / "ok" / "level_0" / "run.json").read_text()
+    info = json.loads((tmp_path / "ok" / "verify.json").read_text())
+    steps = [[lv[k] for k in ("macro_step_s", "mechanics_step_s", "pneumatic_step_s")] for lv in info["levels"]]
+    assert len(steps) == 3 and np.allclose(steps[1:], np.array(steps[:-1]) / 2, rtol=1e-12)  # every step halved
+    assert {e["metric"] for e in info["estimates"]} >= {"dqq_max", "dqq_qs_max"}
     assert main(["verify", twist, *SHORT_TWIST, "--set", "verify.tolerance=1e-12",
                  "--out", str(tmp_path / "strict")]) == 1
     # bad input: exit 2 before anything runs

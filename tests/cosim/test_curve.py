@@ -1,16 +1,16 @@
 """Curve entry co-simulated with the full four-point circuit (valves): consumption, levelling, mass balance."""
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 import pytest
 import yaml
 
-from cosim.limits.criteria import window_mean
 from cosim.kinds.curve_entry import car_centre_s_m, make_car, simulate, summary_row, track_roll_rad
-from cosim.scenario.load import load_scenario
+from cosim.limits.criteria import window_mean
+from cosim.load import load_scenario
+
 from helpers import SCENARIOS, write_scenario
 
 
@@ -26,7 +26,7 @@ def curve_scenario(tmp_path, k=(0.0,), **curve):
 def simulate_curve(s, valves):
     """The curve scenario ``s`` with the valves connected or not: (k values, arrays by name with
     time first and the case last, as (samples, ..., cases), diagnoses, labelled Dataset)."""
-    ds, diag = simulate(dataclasses.replace(s, curve=dataclasses.replace(s.curve, valve_settings=(valves,))))
+    ds, diag = simulate(s.with_experiment(valve_settings=(valves,)))
     arrays = {name: ds[name].transpose("time", ..., "case").values for name in ds.data_vars
               if {"time", "case"} <= set(ds[name].dims)}
     arrays["t_s"] = ds["time"].values
@@ -52,6 +52,7 @@ def curve_runs(tmp_path_factory):
     return s, {v: simulate_curve(s, valves=v) for v in (False, True)}
 
 
+@pytest.mark.slow
 def test_valves_bring_the_bellows_back_into_the_dead_band(curve_runs):
     s, runs = curve_runs
     ks, rec, diag, _ = runs[True]
@@ -88,6 +89,7 @@ def test_isothermal_rolls_more_without_valves(curve_runs):
     assert roll_end[ks.index(float("inf"))] > roll_end[ks.index(0.0)]
 
 
+@pytest.mark.slow
 def test_roll_is_measured_from_the_track_plane_at_the_car_centre(tmp_path):
     """Cant raises the outer (right) rail of a left-hand curve: the track plane rolls right side
     up (negative carbody roll) and the carbody's outward roll relative to it scales with the

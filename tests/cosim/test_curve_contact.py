@@ -1,4 +1,4 @@
-"""Curve runs on the wheel-rail contact (``curve.guidance: contact``, issue 11 items 3, 5, 6): the
+"""Curve runs on the wheel-rail contact (``curve.guidance: contact``): the
 EN 14363 sliding mean and limits, Newton's law for the whole co-simulated car in a steady canted
 arc, the checks a kinematic scenario refuses, the irregularity's determinism, and the scenario
 keys' validation."""
@@ -14,12 +14,13 @@ import pytest
 import yaml
 
 from cosim import cli
-from cosim.limits.criteria import nadal_limit, prudhomme_limit_N, sliding_mean
+from cosim.errors import ScenarioError
 from cosim.kinds.curve_entry import simulate, summary_row
-from cosim.scenario.load import load_scenario
-from cosim.scenario.schema import ScenarioError
+from cosim.limits.criteria import nadal_limit, prudhomme_limit_N, sliding_mean
+from cosim.load import load_scenario
 from cosim.results.series import case_columns
 from vehicle.params import ContactParams
+
 from helpers import ROOT, SCENARIOS, write_scenario
 
 P_MASS_KG = 17000.0 + 2 * 1900.0 + 4 * 800.0     # carbody, bogie frames, wheelsets (paper Table 3)
@@ -80,6 +81,7 @@ def test_nadal_and_prudhomme_limits():
 
 
 # ------------------------------------------------------------------------------ physics
+@pytest.mark.slow
 @pytest.mark.parametrize("cant", [0.03, 0.1016, 0.15])
 def test_steady_canted_arc_rails_carry_the_unbalanced_centripetal_force(tmp_path, cant):
     """R = 100 m, 10 m/s, the car co-simulated with its circuit: once the whole car is in the
@@ -87,7 +89,7 @@ def test_steady_canted_arc_rails_carry_the_unbalanced_centripetal_force(tmp_path
     over the four wheelsets (ΣY; nothing in the model imposes it: it comes from the wheelsets'
     positions on the contact geometry), carry M (v^2/R cos c - g sin c): 16.93 kN at cant 0.03,
     -3 N at the balanced 0.1016, -11.45 kN at 0.15 (excess cant: the car leans on the inner
-    rail). Bound 0.5 % of the larger of M v^2/R and M g sin c (Real track, item 4). Window: the
+    rail). Bound 0.5 % of the larger of M v^2/R and M g sin c. Window: the
     last 6 s (rear wheelset in the arc from t = 3.5 s), ~6 periods of the ~1 Hz carbody sway.
     Measured within 0.2 %: the car is driven at its centre along the tangent there, the wheelsets
     free along the track, so nothing but the rails pushes the car across it (when every
@@ -175,11 +177,12 @@ IRREGULAR = dict(speed_m_per_s=20.0, straight_m=400.0, arc_m=20.0, duration_s=1.
 
 def _generated(path) -> bytes:
     """The scenario's irregularity generated in a fresh Python process (no cache shared)."""
-    code = ("import sys; from cosim.scenario.load import load_scenario; s = load_scenario(sys.argv[1]); "
+    code = ("import sys; from cosim.load import load_scenario; s = load_scenario(sys.argv[1]); "
             "t = s.curve.track_irregularity(s.vehicle); sys.stdout.buffer.write(t.s_m.tobytes() + t.lateral_m.tobytes())")
     return subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, check=True, cwd=ROOT).stdout
 
 
+@pytest.mark.slow
 def test_irregularity_is_deterministic(tmp_path):
     a = write_scenario(tmp_path, scenario_data(**IRREGULAR), "a.yaml")
     b = write_scenario(tmp_path, scenario_data(**IRREGULAR), "b.yaml")
@@ -288,7 +291,7 @@ def test_the_method_1_dip_lowers_the_outer_rail_within_the_twist_limits():
     z_left, z_right = vertical - 0.5 * cross, vertical + 0.5 * cross
     assert np.abs(z_left).max() < 1e-9
     assert z_right.min() == pytest.approx(-0.040, abs=1e-6)
-    twist = lambda base: np.abs(np.interp(x + base, x, z_right) - z_right).max() / base  # noqa: E731
+    twist = lambda base: np.abs(np.interp(x + base, x, z_right) - z_right).max() / base
     assert twist(2.0) == pytest.approx(7e-3, rel=0.02)  # PCHIP rounds the ramp's corners
     assert twist(10.0) == pytest.approx(4e-3, rel=0.01)
     # the dip lies in the arc (from 35 m), ahead of the car at t = 0 (front wheelset at 12 m)

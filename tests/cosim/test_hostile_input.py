@@ -1,4 +1,4 @@
-"""A corpus of malformed scenarios, files and command lines (issue 8, "One validation pass"): each
+"""A corpus of malformed scenarios, files and command lines: each
 ends in exit 2 before anything is simulated, with one message naming the file, the key path as
 the user wrote it and what was expected, no traceback, within seconds.
 
@@ -12,18 +12,18 @@ import copy
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, Optional, Sequence, Union
 
 import pytest
-import tempfile
-
 import yaml
 
 from cosim import cli
-from cosim.scenario.load import load_scenario
+from cosim.load import load_scenario
+
 from helpers import SCENARIOS, short_twist, vehicle_file
 
 PARAMS = vehicle_file(tempfile.mkdtemp(prefix="pneumorail_params_"))   # a parameter file, as a user writes one
@@ -115,7 +115,8 @@ NUMBERS = {  # numbers not finite or out of range
     "zero pipe diameter (rig)": Case("ramp", "circuit.pipe.diameter_m", "> 0", {"circuit.pipe.diameter_m": 0}),
     "zero pipe diameter (car)": Case("twist", "circuit.pipe.diameter_m", "> 0", {"circuit.pipe.diameter_m": 0.0}),
     "zero pipe length": Case("ramp", "circuit.pipe.length_m", "> 0", {"circuit.pipe.length_m": 0}),
-    "zero samples": Case("ramp", "test.samples", "must be an integer in [2, 1000000] (stored time points), got 0", {"test.samples": 0}),
+    "zero samples": Case("ramp", "test.samples", "must be an integer in [2, 1000000] (stored time points), got 0",
+                         {"test.samples": 0}),
     "negative samples": Case("ramp", "test.samples", "got -5", {"test.samples": -5}),
     "a billion samples": Case("ramp", "test.samples", "an integer in [2, 1000000]", {"test.samples": 10 ** 9}),
     "zero samples per period": Case("sine", "test.samples_per_period", "[2, 10000]", {"test.samples_per_period": 0}),
@@ -242,7 +243,7 @@ KEYS = {  # messages that must name the key the user wrote
     "--k garbage": Case("twist", "--k", "comma-separated numbers", argv=["--k", "0,ten"], file=None),
     "--k negative": Case("twist", "--k", ">= 0", argv=["--k", "-1"], file=None),
     "--k nan": Case("twist", "--k", ">= 0", argv=["--k", "nan"], file=None),
-    "--jobs 0": Case("twist", "--jobs", "at least 1", argv=["--jobs", "0"]),
+    "--jobs 0": Case("twist", "--jobs", "must be an integer in [1, 256]", argv=["--jobs", "0"]),
     "verify --levels 1": Case("twist", "--levels", "at least 2", argv=["--levels", "1"], command="verify"),
 }
 
@@ -426,6 +427,7 @@ def _pneumorail(*args, env=None, timeout=30):
 
 @pytest.mark.parametrize("name", ["files: binary", "files: deep flow nesting", "files: alias bomb",
                                   "keys: --set malformed YAML"])
+@pytest.mark.slow
 def test_in_a_fresh_process_no_traceback(name, tmp_path):
     case = CORPUS[name]
     path = _write(case, tmp_path)
@@ -437,6 +439,7 @@ def test_in_a_fresh_process_no_traceback(name, tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_messages_do_not_depend_on_the_hash_seed(tmp_path):
     """Several faults in one pipe (the circuit's own check iterated over a set, so the field it
     named depended on PYTHONHASHSEED): always the first in field order."""

@@ -18,6 +18,7 @@ def _children(pid: int):
     return [int(p) for p in out.split()]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_a_signal_stops_the_run_keeps_its_results_and_leaves_no_worker(sig, code, tmp_path):
     out = tmp_path / "run"

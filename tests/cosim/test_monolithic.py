@@ -1,4 +1,4 @@
-"""The co-simulation against the monolithic reference (cosim/monolithic.py: the same car with the
+"""The co-simulation against the monolithic reference (cosim/verification/monolithic.py: the same car with the
 circuit integrated inside exudyn, one integrator, no macro-step), on short horizons.
 
 Tolerances. Each is 3 x (|error of the co-simulation at its shipped steps| + |error of the
@@ -14,19 +14,17 @@ tolerance, the curve's air exhausted by 9.0e-3 g, 22 x, and its air injected by 
 """
 from __future__ import annotations
 
-import dataclasses
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from cosim.kinds import curve_entry as curve, twist
+from cosim.kinds import curve_entry as curve
+from cosim.kinds import twist
 from cosim.kinds.car import build_cosimulation
-from cosim.verification.monolithic import MonolithicCar, curve_headlines, run_monolithic, twist_headlines
-from cosim.scenario.load import load_scenario
+from cosim.load import load_scenario
+from cosim.verification.monolithic import MonolithicCar, run_monolithic
 from vehicle.car import WHEELS
 
-SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
+from helpers import SCENARIOS
 
 # Twist, k = 0, the 40 mm twist ramped in 1 s (5 s shipped), 1 s hold; co-simulation at the
 # shipped 10 ms, monolithic at 5 ms. Measured errors against the common limit [ΔQ/Q0]:
@@ -58,7 +56,7 @@ CURVE_TOL = {"roll_max_rad": 5.5e-6, "roll_mean_end_rad": 4.0e-6, "air_injected_
 
 def _twist_scenario(coupling: str = "linearised"):
     s = load_scenario(SCENARIOS / "twist_dqq.yaml", ["solver.jobs=1", f"solver.coupling={coupling}"], [0.0])
-    return dataclasses.replace(s, twist=dataclasses.replace(s.twist, ramp_s=1.0, hold_s=1.0))
+    return s.with_experiment(ramp_s=1.0, hold_s=1.0)
 
 
 def _cosim(scenario, make_car, duration_s):
@@ -70,31 +68,33 @@ def _cosim(scenario, make_car, duration_s):
 def test_twist_cosimulation_matches_monolithic_reference():
     scenario = _twist_scenario()
     T = scenario.twist.duration_s                                        # 2 s
-    cosim = twist_headlines(_cosim(scenario, twist.make_car, T))
+    cosim = twist.record_headlines(scenario, _cosim(scenario, twist.make_car, T))
     record = run_monolithic(scenario, 0.0, T, 0.005)
     assert record.monolithic.stats.steps == 400                          # the fixed step held throughout
-    mono = twist_headlines(record.arrays())
+    mono = twist.record_headlines(scenario, record.arrays())
     assert 0.16 < mono["dqq_max"] < 0.17                                 # the dynamic peak of the fast ramp
     for metric, tol in TWIST_TOL.items():
         assert abs(cosim[metric] - mono[metric]) <= tol, (metric, cosim[metric], mono[metric], tol)
     # not vacuous: the first-order (held-force) coupling misses the reference by far more
-    held = twist_headlines(_cosim(_twist_scenario("explicit"), twist.make_car, T))
+    held = twist.record_headlines(scenario, _cosim(_twist_scenario("explicit"), twist.make_car, T))
     assert abs(held["dqq_max"] - mono["dqq_max"]) > 10 * TWIST_TOL["dqq_max"]
 
 
+@pytest.mark.slow
 def test_curve_with_valves_cosimulation_matches_monolithic_reference():
     scenario = load_scenario(SCENARIOS / "curve_entry.yaml",
                              ["solver.jobs=1", "curve.straight_m=12", "curve.duration_s=3"], [0.0])
     scenario = scenario.with_valves(True)
     T = scenario.curve.duration_s
-    cosim = curve_headlines(scenario, _cosim(scenario, curve.make_car, T), window_s=1.0)
+    cosim = curve.record_headlines(scenario, _cosim(scenario, curve.make_car, T), window_s=1.0)
     record = run_monolithic(scenario, 0.0, T, scenario.solver.mechanics_step_s)
-    mono = curve_headlines(scenario, record.arrays(), window_s=1.0)
+    mono = curve.record_headlines(scenario, record.arrays(), window_s=1.0)
     assert mono["air_injected_kg"] > 5e-3 and mono["air_exhausted_kg"] > 3e-3   # the valves did work
     for metric, tol in CURVE_TOL.items():
         assert abs(cosim[metric] - mono[metric]) <= tol, (metric, cosim[metric], mono[metric], tol)
 
 
+@pytest.mark.slow
 def test_monolithic_crushing_rate_is_the_derivative_of_the_crushing():
     # The circuit's volume rate must integrate to its volume change: the trapezoidal integral of
     # the crushing rate the circuit sees equals the change of the crushing to the quadrature error
@@ -121,7 +121,7 @@ def test_monolithic_rejects_what_it_cannot_run():
     with pytest.raises(ValueError, match="whole number of steps"):
         run_monolithic(scenario, 0.0, 0.0125, 0.005)
     rig = load_scenario(SCENARIOS / "rig_ramp.yaml")
-    with pytest.raises(ValueError, match="twist and curve_entry"):
+    with pytest.raises(ValueError, match="runs car scenarios"):
         run_monolithic(rig, 0.0, 0.01, 0.005)
 
 

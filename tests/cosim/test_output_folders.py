@@ -7,9 +7,10 @@ import subprocess
 
 import pytest
 
-from cosim.results import io as results
 from cosim.cli import main
+from cosim.results import io as results
 from cosim.results.outdir import INCOMPLETE, LOCK, default_folder
+
 from helpers import SCENARIOS
 
 SHORT = [str(SCENARIOS / "twist_dqq.yaml"), "--k", "0", "--set", "twist.ramp_s=0.2", "--set", "twist.hold_s=0.2",
@@ -23,6 +24,7 @@ def test_a_folder_under_a_regular_file_is_refused_before_simulating(tmp_path, ca
     assert main(["run", *SHORT, "--out", str(tmp_path / "file")]) == 2
 
 
+@pytest.mark.slow
 def test_a_previous_run_is_refused_unless_overwrite_which_clears_it(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["run", *SHORT, "--out", str(out)]) == 0
@@ -34,6 +36,7 @@ def test_a_previous_run_is_refused_unless_overwrite_which_clears_it(tmp_path, ca
     assert not (out / "stale.csv").exists() and (out / "summary.csv").exists()
 
 
+@pytest.mark.slow
 def test_a_folder_another_live_run_writes_into_is_refused(tmp_path, capsys):
     out = tmp_path / "run"
     out.mkdir()

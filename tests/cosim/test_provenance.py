@@ -5,7 +5,10 @@ from __future__ import annotations
 import hashlib
 import json
 
+import pytest
+
 from cosim.cli import main
+
 from helpers import SCENARIOS
 
 
@@ -15,6 +18,7 @@ def _strict(text):
     return json.loads(text, parse_constant=refuse)
 
 
+@pytest.mark.slow
 def test_run_json_records_resolved_parameters_and_file_hashes(tmp_path):
     out = tmp_path / "run"
     assert main(["run", str(SCENARIOS / "twist_dqq.yaml"), "--k", "0,inf", "--set", "twist.ramp_s=0.5",
@@ -39,7 +43,7 @@ def test_an_irregularity_file_is_hashed_with_the_scenario(tmp_path):
     data["curve"]["irregularity"] = {"file": "track.csv"}
     (tmp_path / "track.csv").write_text("s_m,lateral_m\n0,0\n20,0\n30,0.001\n40,0\n")
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
-    from cosim.scenario.load import load_scenario
+    from cosim.load import load_scenario
     files = dict(load_scenario(tmp_path / "s.yaml").files_sha256)
     assert files["track.csv"] == hashlib.sha256((tmp_path / "track.csv").read_bytes()).hexdigest()
     assert set(files) == {"s.yaml", "track.csv"}

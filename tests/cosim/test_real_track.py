@@ -8,8 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from cosim.scenario.model import StateLimits
 from cosim.limits.watch import StateWatch
+from cosim.scenario.model import StateLimits
+
+from helpers import SCENARIOS
 
 
 class FakeCar:
@@ -133,7 +135,8 @@ def test_flexible_track_carries_a_load_by_its_own_stiffness(guidance):
         # the rails push the wheelsets back with what the carbody is pushed with
         assert car.wheelset_lateral_forces_N().sum() == pytest.approx(-Fy, rel=0.01)
     # a 40 kN m roll moment (+x: left side up) rolls the car onto its right wheels (with contact
-    # guidance against the 8 kN lateral load, which alone leans it on the left ones); the track rolls under the moment of the load difference about its centre
+    # guidance against the 8 kN lateral load, which alone leans it on the left ones); the track
+    # rolls under the moment of the load difference about its centre
     # (the lateral forces act at rail level, through the roll axis): k_roll roll = -(Q_L - Q_R) b,
     # b the half-spacing of the contact points (contact: 0.753 m, the table's; kinematic: 0.75 m),
     # within 2 % (the contact points move by a few mm across the wheel)
@@ -144,13 +147,12 @@ def test_flexible_track_carries_a_load_by_its_own_stiffness(guidance):
 
 
 # ---------------------------------------------------------------------------- runs
+import vehicle.car  # noqa: E402
 from cosim import cli  # noqa: E402
 from cosim.kinds.curve_entry import ramp_roll_rate_step_rad_per_s  # noqa: E402
-from cosim.scenario.model import DEFAULT_SPECTRAL_RADIUS  # noqa: E402
+from cosim.load import load_scenario  # noqa: E402
 from cosim.runner import run  # noqa: E402
-from cosim.scenario.load import load_scenario  # noqa: E402
-from helpers import SCENARIOS  # noqa: E402
-import vehicle.car  # noqa: E402
+from cosim.scenario.model import DEFAULT_SPECTRAL_RADIUS  # noqa: E402
 
 
 def test_one_default_spectral_radius():
@@ -165,6 +167,7 @@ def canted_curve(guidance, cant, *extra):
                           "curve.valve_settings=[false]", "solver.jobs=1", *extra], [math.inf])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("guidance", ["kinematic", "contact"])
 @pytest.mark.parametrize("cant", [0.1016, 0.15])
 def test_the_cases_that_failed_run_at_the_shipped_steps(guidance, cant):
@@ -184,6 +187,7 @@ def test_the_cases_that_failed_run_at_the_shipped_steps(guidance, cant):
         == pytest.approx(0.0677, abs=1e-4)
 
 
+@pytest.mark.slow
 def test_a_capsizing_car_stops_with_a_diagnosis_and_keeps_its_results(tmp_path):
     """54 m/s (km/h typed as m/s) into R 300 m with cant 0.1, kinematic guidance, k = 0, valves
     off: the car overturns. It ran to its end with exit 0 before (roll 2.4 rad, bellow air at
@@ -207,7 +211,8 @@ def test_only_the_rails_push_the_contact_guided_car_across_the_track():
     the contact forces plus the drive's reaction along the track tangent at the car centre, and
     nothing else: no joint pushes the car across the track. Bound: 1e-6 of the car's weight
     (Newton's tolerance)."""
-    from vehicle.car import _OUT
+    from exudyn import OutputVariableType as _OUT
+
     from vehicle.track import TrackGeometry
     p = VehicleParams()
     track = TrackGeometry.curve_entry(20.0, 15.0, 100.0, 150.0, cant_rad=0.1016, transition_shape="bloss")

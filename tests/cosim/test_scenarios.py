@@ -8,8 +8,9 @@ import pytest
 import yaml
 
 from cosim import cli
-from cosim.scenario.load import load_scenario
-from cosim.scenario.schema import ScenarioError
+from cosim.errors import ScenarioError
+from cosim.load import load_scenario
+
 from helpers import SCENARIOS, short_twist, vehicle_file, write_scenario
 
 RIG = yaml.safe_load((SCENARIOS / "rig_ramp.yaml").read_text())
@@ -81,7 +82,7 @@ def test_yaml_exponent_without_sign_is_read_as_a_number(tmp_path):
     # PyYAML reads 4.0e5 as a string; the loader accepts the obvious intent.
     path = tmp_path / "s.yaml"
     path.write_text((SCENARIOS / "rig_ramp.yaml").read_text().replace("4.0e+5", "4.0e5"))
-    assert load_scenario(path).rig.p0_Pa == 4.0e5
+    assert load_scenario(path).circuit.p0_Pa == 4.0e5
 
 
 def _explicit_circuit():
@@ -159,6 +160,7 @@ def test_a_run_that_diverges_keeps_its_results_and_says_where(tmp_path, capsys):
     stop with a diagnosis and keep the series up to there (the runner then reports it and the
     CLI exits 1) -- provoked through the API, since the scenario loader refuses such input."""
     import numpy as np
+
     from pneumatics.chamber import Bellow
     from pneumatics.rig import ramp_motion, run_time_series
     stroke = 0.012 / 0.13
@@ -207,17 +209,19 @@ def test_set_overrides_a_single_field_of_a_vehicle_parameter_file():
         load_scenario(SCENARIOS / "curve_entry.yaml", ["vehicle.no_such_field=1"])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["rig_table2.yaml", "rig_stiffness.yaml"])
 def test_loading_a_rig_scenario_imports_no_exudyn(name):
     # a fresh interpreter: the rig needs only the pneumatics
     import subprocess
     import sys
-    code = ("import sys; from cosim.scenario.load import load_scenario; "
+    code = ("import sys; from cosim.load import load_scenario; "
             f"load_scenario({str(SCENARIOS / name)!r}); print(any('exudyn' in m for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
 
 
+@pytest.mark.slow
 def test_the_throttled_explicit_circuit_starts_at_rest_and_runs(tmp_path):
     # Tanks joined to their bellows by orifices (no pipe) take the bellows' static pressure:
     # without twist nothing moves (|ΔQ/Q0| at round-off of the static equilibrium, < 1e-6).

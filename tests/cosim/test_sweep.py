@@ -12,12 +12,13 @@ from pathlib import Path
 import pytest
 import yaml
 
-from cosim.sweep import study as sw
 from cosim.cli import main
+from cosim.errors import ScenarioError
+from cosim.results.io import read_rows
+from cosim.sweep import study as sw
 from cosim.sweep.executors import Pool, Serial
-from cosim.scenario.schema import ScenarioError
 
-from helpers import short_twist, write_scenario
+from helpers import SCENARIOS, short_twist, write_scenario
 
 #: two twist heights x two bellow volumes; V0 = 0.5 l drives the bellow beyond its stroke: the case
 #: stops (its air leaves the range of physics, or the circuit diverges within the macro-step)
@@ -126,9 +127,10 @@ def test_dask_missing_is_a_clear_bad_input(tmp_path, monkeypatch, capsys):
 
 
 # ----------------------------------------------------------------------------- running
+@pytest.mark.slow
 def test_serial_run_records_every_case_and_the_diverged_ones(serial_run):
     s, outcome = serial_run
-    rows = sw.read_rows(outcome.out / "sweep.csv")
+    rows = read_rows(outcome.out / "sweep.csv")
     assert len(rows) == 4 and list(rows[0])[:4] == ["case", "status", "twist.twist_per_mille", "circuit.bellow.V0_m3"]
     assert {"dqq_max", "dqq_qs_max", "k_W_per_K", "valves", "diagnosis"} <= set(rows[0])
     by = {(r["twist.twist_per_mille"], r["circuit.bellow.V0_m3"]): r for r in rows}
@@ -144,6 +146,7 @@ def test_serial_run_records_every_case_and_the_diverged_ones(serial_run):
     assert not outcome.all_ok
 
 
+@pytest.mark.slow
 def test_two_processes_give_identical_results_and_a_rerun_skips_finished_cases(serial_run, tmp_path):
     s, serial = serial_run
     out = tmp_path / "pool"
@@ -162,6 +165,7 @@ def test_two_processes_give_identical_results_and_a_rerun_skips_finished_cases(s
     assert csv_text(out) == csv_text(serial.out)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_serial_results(serial_run, tmp_path):
     pytest.importorskip("distributed")
     from cosim.sweep.executors import Dask
@@ -170,6 +174,7 @@ def test_dask_local_cluster_gives_the_serial_results(serial_run, tmp_path):
     assert csv_text(tmp_path / "dask") == csv_text(serial.out)
 
 
+@pytest.mark.slow
 def test_check_evaluates_the_limits_in_every_case_without_rerunning(serial_run, tmp_path, capsys):
     s, serial = serial_run
     out = tmp_path / "out"
@@ -205,11 +210,12 @@ def _fail_one(target_ms):
     return patched
 
 
+@pytest.mark.slow
 def test_a_failing_case_is_recorded_the_others_finish_and_a_rerun_retries_it(tmp_path, monkeypatch):
     s = spec(tmp_path, grid={"twist.ramp_s": [0.2, 0.4]})
     monkeypatch.setattr(sw, "_run_scenario", _fail_one(0.4))
     first = run(s, tmp_path / "out")
-    rows = sw.read_rows(tmp_path / "out" / "sweep.csv")
+    rows = read_rows(tmp_path / "out" / "sweep.csv")
     assert [r["status"] for r in rows] == ["ok", "failed"]
     assert rows[1]["diagnosis"] == "RuntimeError: solver exploded" and rows[1]["dqq_max"] == "nan"
     assert (tmp_path / "out" / "cases" / first.prepared.cases[1].key / "failed.json").exists()
@@ -218,6 +224,7 @@ def test_a_failing_case_is_recorded_the_others_finish_and_a_rerun_retries_it(tmp
     assert again.ran == [first.prepared.cases[1].key] and again.all_ok
 
 
+@pytest.mark.slow
 def test_a_killed_worker_fails_only_its_case_and_a_rerun_completes_the_sweep(tmp_path, monkeypatch):
     s = spec(tmp_path, grid={"twist.ramp_s": [0.2, 0.4, 0.6]})
     real = sw._run_scenario
@@ -237,6 +244,7 @@ def test_a_killed_worker_fails_only_its_case_and_a_rerun_completes_the_sweep(tmp
     assert again.ran == [first.prepared.cases[1].key] and again.all_ok
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_what_finished_and_says_how_to_resume(tmp_path, monkeypatch, capsys):
     real = sw._run_scenario
 
@@ -250,13 +258,13 @@ def test_ctrl_c_keeps_what_finished_and_says_how_to_resume(tmp_path, monkeypatch
     assert main(args) == 130
     captured = capsys.readouterr()
     assert "interrupted: 1 of 2 cases finished and kept; rerun the same command to resume" in captured.err
-    assert [r["status"] for r in sw.read_rows(tmp_path / "out" / "sweep.csv")] == ["ok", "pending"]
+    assert [r["status"] for r in read_rows(tmp_path / "out" / "sweep.csv")] == ["ok", "pending"]
     monkeypatch.undo()
     assert main(args + ["--quiet"]) == 0
     assert "1 run now, 1 finished before" in capsys.readouterr().out
 
 
 def test_shipped_sweep_files_are_valid():
-    for path in sorted((Path(__file__).resolve().parents[1] / "scenarios" / "sweeps").glob("*.yaml")):
+    for path in sorted((SCENARIOS / "sweeps").glob("*.yaml")):
         prepared = sw.prepare(sw.load_sweep_file(path))
         assert len(prepared.cases) >= 2 and len({c.key for c in prepared.cases}) == len(prepared.cases)

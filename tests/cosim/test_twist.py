@@ -1,7 +1,6 @@
 """The co-simulated twist test: equilibrium, symmetry, physics trends, macro-step convergence, CLI checks."""
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -9,12 +8,13 @@ import pytest
 import yaml
 
 from cosim import cli
-from cosim.limits.criteria import static_wheel_loads, wheel_unloading, window_mean
-from cosim.scenario.load import load_scenario
 from cosim.kinds.car import build_cosimulation
 from cosim.kinds.twist import make_car, rail_heights, simulate, wheelset_x_m
-from helpers import SCENARIOS, short_twist, write_scenario
+from cosim.limits.criteria import static_wheel_loads, wheel_unloading, window_mean
+from cosim.load import load_scenario
 from vehicle.car import WHEELS, MetroCar
+
+from helpers import SCENARIOS, short_twist, write_scenario
 
 
 def scenario(tmp_path, **changes):
@@ -36,7 +36,7 @@ def en_scenario(tmp_path, name="en.yaml", **changes):
 def quasi_static_dqq(s, valves=False):
     """(8, cases) ΔQ/Q0 averaged over the final window, and the full (samples, 8, cases) series;
     levelling valves isolated unless ``valves``."""
-    ds, diag = simulate(dataclasses.replace(s, twist=dataclasses.replace(s.twist, valve_settings=(valves,))))
+    ds, diag = simulate(s.with_experiment(valve_settings=(valves,)))
     assert not diag
     dqq = ds["dqq"].transpose("time", "wheel", "case").values
     return window_mean(ds["time"].values, dqq, s.twist.window), dqq
@@ -91,6 +91,7 @@ def test_adiabatic_unloads_more_than_isothermal_and_diagonal_pattern(tmp_path):
     assert end[i("4R")] > 0 > end[i("4L")]
 
 
+@pytest.mark.slow
 def test_macro_step_convergence(tmp_path):
     """H = 5, 2, 1, 0.5 ms approach each other. The multibody step is held at 0.5 ms in every run
     so that only the coupling changes: the exchange interval H and with it the pneumatic RK4
@@ -110,6 +111,7 @@ def test_macro_step_convergence(tmp_path):
     assert errors[0] < 1e-3 * ref[0].mean(), errors
 
 
+@pytest.mark.slow
 def test_check_exit_codes(tmp_path, capsys):
     passing = write_scenario(tmp_path, short_twist(checks=["dqq_max <= 0.6", "dqq_max[3R] <= 0.6",
                                                            "dqq_qs_max[k=inf, valves=off] <= 0.6"]), "pass.yaml")
@@ -166,9 +168,9 @@ class _StandingCar:
 
 
 def test_a_diverging_case_stops_alone_and_keeps_its_record(tmp_path):
-    from cosim.kinds.car import static_pressures
     from cosim.master import CoSimulation
     from pneumatics.circuit import Circuit
+    from pneumatics.layouts import static_pressures
     s = scenario(tmp_path)
     comps = s.circuit.components()
     circuit = Circuit(comps, k_W_per_K=np.array([0.0, 10.0]))
@@ -176,7 +178,7 @@ def test_a_diverging_case_stops_alone_and_keeps_its_record(tmp_path):
     cosim = CoSimulation([_StandingCar(), _StandingCar(fail_at_s=0.1)], circuit, x0, 0.005, 0.005,
                          case_labels=["k = 0", "k = 10"])
     record, diagnosis = cosim.run(0.3, 0.01)
-    Q = np.asarray(record.wheel_load_N)
+    Q = record.arrays()["wheel_load_N"]
     t = np.asarray(record.t_s)
     assert t[-1] == pytest.approx(0.3)                      # the healthy case ran to the end
     assert np.all(np.isfinite(Q[:, :, 0]))

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hand_models import roll_hand_calculation
 
 from cosim.kinds.car import build_cosimulation
-from cosim.scenario.load import load_scenario
-from helpers import SCENARIOS
-from test_vehicle_components import roll_hand_calculation
+from cosim.load import load_scenario
 from vehicle.car import MetroCar
+
+from helpers import SCENARIOS
 
 M_N_m = 20e3        # static roll moment on the carbody
 
@@ -20,6 +21,7 @@ def car_with_roll_moment(scenario):
     return car
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("layout", ["two_point", "four_point"])
 def test_static_roll_stiffness_with_the_cross_pipe_open_is_the_anti_roll_bars(layout):
     # The car of two_point_twist.yaml standing on level track, isothermal bellows (k = inf: the
@@ -30,12 +32,12 @@ def test_static_roll_stiffness_with_the_cross_pipe_open_is_the_anti_roll_bars(la
     cosim = build_cosimulation(s, [float("inf")], car_with_roll_moment)
     record, diagnosis = cosim.run(20.0, 0.02)
     assert diagnosis is None
-    t, roll = np.asarray(record.t_s), np.asarray(record.roll_rad)[:, 0]
+    t, roll = np.asarray(record.t_s), record.arrays()["roll_rad"][:, 0]
     measured = roll[t > 17.0].mean()
     k_arb = s.vehicle.arb_roll_stiffness_N_m_per_rad
     # Two-point: the cross pipes keep each bogie's bellows at one pressure and their total volume
     # does not change in roll, so they resist none of it: the hand calculation with bellow
-    # stiffness 0 (tests/test_vehicle_components.py; 2 %, as there: what it leaves out is the
+    # stiffness 0 (tests/vehicle/test_vehicle_components.py; 2 %, as there: what it leaves out is the
     # second-order tilt of the connectors' mid-frames; measured 0.01495 rad). Four-point: the
     # isothermal bellows add A^2 p / V_total each (bellow and tank, 39 dm3: 183 kN/m), so the car
     # rolls clearly less (measured 0.01203 rad; the hand calculation with 183 kN/m bellows gives

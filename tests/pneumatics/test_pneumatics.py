@@ -30,8 +30,13 @@ from pneumatics.integrate import advance, simulate
 from pneumatics.orifice import LAMINAR_RATIO, Orifice, iso6358_mass_flow_kg_per_s, orifice_flow_kg_per_s
 from pneumatics.periodic import periodic_steady_state, sine_phase_motion
 from pneumatics.pipe import Pipe
-from pneumatics.valves import (LEVELLING_C_MAX, DifferentialPressureValve, LevellingValve, SafetyValve,
-                               differential_valve_flow_kg_per_s)
+from pneumatics.valves import (
+    LEVELLING_C_MAX,
+    DifferentialPressureValve,
+    LevellingValve,
+    SafetyValve,
+    differential_valve_flow_kg_per_s,
+)
 
 # ----------------------------------------------------------------------------- constants
 R = 287.0                       # J/(kg K), docs/models.md
@@ -189,6 +194,7 @@ def _pipe_ringing_bound(n, T_ramp):
     return 2.0 * rho0 * A_E ** 2 * (V_T / V) ** 2 * omega_n * PIPE_L / (PIPE_A * T_ramp * K)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("with_tank", [True, False], ids=["bellow+tank", "bellow-only"])
 @pytest.mark.parametrize("k, n", [(0.0, GAMMA), (math.inf, 1.0)], ids=["adiabatic", "isothermal"])
 def test_small_slow_ramp_stiffness_matches_table2_formula(with_tank, k, n):
@@ -677,6 +683,7 @@ def test_rk4_steps_agree_with_simulate_on_a_sine(h, rtol, rtol_force):
 # =============================================================================
 # 9. Periodic steady state by shooting vs brute force
 # =============================================================================
+@pytest.mark.slow
 def test_periodic_shooting_matches_brute_force_and_adiabatic_is_not_stabilised():
     f, a = 5.0, 0.02
     comps = table1_components(True)
@@ -733,6 +740,7 @@ def _polytropic_index(k, omega):
     return abs(1.0 + (GAMMA - 1.0) * 1j * omega / (1j * omega + lam))
 
 
+@pytest.mark.slow
 def test_dynamic_stiffness_low_frequency_plateau_isothermal():
     a, f = 0.005, 0.1
     pts = rig.dynamic_stiffness_sweep(table1_components(True), [1e4, math.inf], [f], a)

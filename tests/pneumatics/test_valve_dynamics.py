@@ -1,4 +1,4 @@
-"""Levelling-valve response dynamics (play, dead time, lag) and per-valve outputs (issue 7, item 5).
+"""Levelling-valve response dynamics (play, dead time, lag) and per-valve outputs.
 
 Every expected value is computed here from the element's own equation (closed forms: the
 exponential of a lag, the Erlang distribution of the delay chain, the geometry of a play, the
@@ -281,6 +281,7 @@ def test_open_time_and_air_per_side_under_constant_crushing():
     np.testing.assert_allclose(air.exhaust[0], -circuit.mass_from(x, "atmosphere"), rtol=1e-15)
 
 
+@pytest.mark.slow
 def test_recommended_dynamics_keep_the_valve_shut_in_a_1hz_sway():
     """+-10 mm, 1 Hz sway of the crushing for 4 s. Instantaneous valve: each side is open while
     |z| > 5 mm on its side, i.e. while |sin| > 1/2: a third of each period. With the

@@ -1,4 +1,4 @@
-"""The metro car with contact guidance (vehicle/car.py, guidance="contact"; issue 11, item 3): the
+"""The metro car with contact guidance (vehicle/car/, guidance="contact"): the
 wheelsets are free laterally and in yaw, held on the track by the wheel-rail contact forces of
 vehicle/wheelrail (contact table, Hertz normal force, Kalker + Shen-Hedrick-Elkins creep).
 
@@ -8,7 +8,7 @@ twist test at standstill against the kinematic car, a released car on straight t
 irregularity input; plus the static start, the car's contact table and the sign conventions
 of the outputs.
 
-The pneumatic suspension is emulated as in tests/test_vehicle_curve.py: per bellow
+The pneumatic suspension is emulated as in tests/vehicle/test_vehicle_curve.py: per bellow
 F = F0 + k_b z with dF/dz = k_b = 243 kN/m (paper Table 2), updated every 5 ms macro-step.
 """
 import math
@@ -20,7 +20,7 @@ from vehicle.car import WHEELS, MetroCar
 from vehicle.params import ContactParams, VehicleParams
 from vehicle.track import TrackGeometry
 from vehicle.wheelrail.derive_table import derive_default
-from vehicle.wheelrail.geometry import ContactTable, COLUMNS, table_path
+from vehicle.wheelrail.geometry import COLUMNS, ContactTable, table_path
 
 P = VehicleParams()
 K_B_N_PER_M = 243e3
@@ -44,6 +44,7 @@ def run(car, t_end_s, record=None):
 
 
 # ---------------------------------------------------------------- table and static start
+@pytest.mark.slow
 def test_car_contact_table_is_reproduced_by_its_derivation():
     # the shipped table for the car's 0.42 m wheels is what derive_table writes for that radius
     stored = ContactTable.from_csv(table_path(P.wheel_radius_m))
@@ -53,6 +54,7 @@ def test_car_contact_table_is_reproduced_by_its_derivation():
     assert stored.r0 == pytest.approx(0.42, abs=2e-4)  # rolling radius of the centred wheelset
 
 
+@pytest.mark.slow
 def test_static_start_on_the_contacts():
     car = MetroCar(P, guidance="contact")
     Q = car.wheel_loads_N()
@@ -83,6 +85,7 @@ def test_rejects_bad_arguments():
 
 
 # ---------------------------------------------------------------- steady curving
+@pytest.mark.slow
 def test_steady_curve_lateral_forces_balance_the_unbalanced_acceleration():
     """R = 600 m, 20 m/s, cant 0.03 rad (45 mm): the car is one body in steady circular motion,
     so the rails' forces in the track plane carry M (v^2/R cos c - g sin c) = 8.93 kN (Newton's
@@ -146,7 +149,7 @@ def test_flange_contact_holds_still_when_the_step_is_halved():
     flange at t ~ 2.2 s. In the first version, at 2.5 ms steps a ~135 Hz oscillation of the 1R
     wheel load grew from 7 to 270 kN peak to peak within a second until the wheelset left the
     table (at 5 ms the integrator's numerical damping hid it; the cause, a flutter of the
-    continuous contact model: tests/test_contact_stability.py). Now the flange impact rings a
+    continuous contact model: tests/vehicle/test_contact_stability.py). Now the flange impact rings a
     ~45 Hz wheelset mode (1-2 kN), which decays, and the 2 m means the EN 14363 evaluation uses
     do not depend on the step."""
     track = TrackGeometry.curve_entry(30.0, 15.0, 100.0, 60.0)
@@ -178,7 +181,7 @@ def test_flange_contact_holds_still_when_the_step_is_halved():
 
 # ---------------------------------------------------------------- standstill: the twist test
 def test_twist_at_standstill_reproduces_the_kinematic_wheel_loads():
-    """The EN 14363 twist of cosim/twist.py (rails under 1R and 2R raised by 40 mm, the twist
+    """The EN 14363 twist of cosim/kinds/twist.py (rails under 1R and 2R raised by 40 mm, the twist
     limit over the 10 m base, half-cosine ramp), here over 2 s and held for 1 s, at v = 0.
 
     With contact guidance the standing car rests on its free wheelsets, held by the creep
@@ -231,6 +234,7 @@ def test_released_wheelsets_stay_on_the_track_at_low_speed():
 
 
 # ---------------------------------------------------------------- irregularities
+@pytest.mark.slow
 def test_lateral_alignment_irregularity_is_followed():
     """A sine alignment of the track (amplitude 2 mm, wavelength 25 m) on straight track at
     10 m/s, faded in over the first 25 m so that the car starts on the design track: the
@@ -294,6 +298,7 @@ def test_vertical_irregularity_changes_the_wheel_loads_in_both_modes():
     assert total["contact"] == pytest.approx(total["kinematic"], rel=0.02)
 
 
+@pytest.mark.slow
 def test_a_derailing_wheelset_stops_the_run():
     """A lateral force of 150 kN on the carbody (6 m/s^2 on the whole car, beyond its
     overturning limit, ~4.9 m/s^2 for a rigid car with its centre of gravity 1.5 m above rails

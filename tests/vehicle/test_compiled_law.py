@@ -21,8 +21,7 @@ import numpy as np
 import pytest
 
 from vehicle.wheelrail import compiled
-from vehicle.wheelrail.contact_law import (SCALAR, ContactLawTable, WheelsetParams,
-                                           WheelsetState, generalized_forces)
+from vehicle.wheelrail.contact_law import SCALAR, ContactLawTable, WheelsetParams, WheelsetState, generalized_forces
 from vehicle.wheelrail.geometry import ContactTable
 from vehicle.wheelrail.track_contact import WheelsetTrackContact, _wheelset
 
@@ -243,6 +242,7 @@ def test_kernels_give_the_same_forces_without_numba(contact):
     np.testing.assert_array_less(np.abs(got - ref), 1e-12 * scale)
 
 
+@pytest.mark.slow
 def test_an_edited_law_is_not_run_from_a_stale_cache(tmp_path):
     """numba re-validates a cached kernel against its own file only. A kernel that calls a
     jitable law from another file is compiled and cached in one process; the law is edited;

@@ -1,8 +1,8 @@
-"""The contact law's flange contact is stable as a continuous model (issue 11): eigenvalues of a
+"""The contact law's flange contact is stable as a continuous model: eigenvalues of a
 wheelset pressed against the flange, linearised about its steady rolling state
 (vehicle/wheelrail/stability.py), no integrator involved. The first version's law (rigid table
 read as it is, normal damping 5e4 N s/m) fails the same check: that is what made its curve
-entry depend on the time step (tests/test_car_contact.py)."""
+entry depend on the time step (tests/vehicle/test_car_contact.py)."""
 from __future__ import annotations
 
 import numpy as np
@@ -37,7 +37,7 @@ def test_flange_contact_modes_are_damped(table):
     assert max(s.growth_per_s(100.0) for s in states) < -50.0
     # a weak ~40 Hz growth (<= 1.5 /s: e-folding in 0.7 s) remains in this idealisation with
     # the bogie held fixed while the wheel is on the flange root; the car's runs converge
-    # (tests/test_car_contact.py). Bound 3 /s: it must not grow into a flutter
+    # (tests/vehicle/test_car_contact.py). Bound 3 /s: it must not grow into a flutter
     assert max(s.growth_per_s() for s in states) < 3.0
 
 

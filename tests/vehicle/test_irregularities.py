@@ -10,17 +10,26 @@ m^2/(cycle/m) is converted by S(Omega) = S_f(f) / (2 pi), Omega = 2 pi f.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.integrate import quad
 from scipy.signal import welch
 
-from vehicle.irregularities import (CHANNELS, COLUMNS, PSD_KINDS, TrackIrregularity, band_variance,
-                                    canonical_kind, psd, psd_per_cycle)
+from vehicle.irregularities import (
+    CHANNELS,
+    COLUMNS,
+    PSD_KINDS,
+    TrackIrregularity,
+    band_variance,
+    canonical_kind,
+    psd,
+    psd_per_cycle,
+)
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "scenarios" / "track" / "irregularity_example.csv"
+from helpers import SCENARIOS
+
+EXAMPLE = SCENARIOS / "track" / "irregularity_example.csv"
 BAND = (3.0, 150.0)
 
 

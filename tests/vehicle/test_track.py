@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from vehicle.track import Arc, Straight, TrackGeometry, Transition
 from vehicle import track as track_module
+from vehicle.track import Arc, Straight, TrackGeometry, Transition
 
 POS_TOL_M = 1e-11
 ANGLE_TOL_RAD = 1e-13  # heading values are O(1) rad, polynomial in s: round-off ~1e-15 rad

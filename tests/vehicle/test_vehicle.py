@@ -1,4 +1,4 @@
-"""Tests of the exudyn metro-car model (vehicle/car.py) and its parameters.
+"""Tests of the exudyn metro-car model (vehicle/car/) and its parameters.
 
 Where a test needs the pneumatic suspension, it is emulated here by a stiff bellow linearised
 about the static state, F = F0 + k z with dF/dz = k (k = 243 kN/m: paper Table 2, bellow + tank,

@@ -1,9 +1,9 @@
-"""Tests of the running metro car (vehicle/car.py with a track): start state, guidance, straight
+"""Tests of the running metro car (vehicle/car/ with a track): start state, guidance, straight
 run, curve entry (steady roll against a quasi-static hand calculation, wheel load transfer
 against the overturning moment), left/right symmetry, bumpstops, cant; and of the track sampler
 (vehicle/guidance.py).
 
-Where the pneumatic suspension is needed it is emulated as in tests/test_vehicle.py: per bellow
+Where the pneumatic suspension is needed it is emulated as in tests/vehicle/test_vehicle.py: per bellow
 F = F0 + k_b z with dF/dz = k_b, updated every 5 ms macro-step; k_b = 243 kN/m (adiabatic) or
 173 kN/m (isothermal), paper Table 2, bellow + auxiliary tank.
 

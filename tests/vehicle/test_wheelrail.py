@@ -10,8 +10,14 @@ from scipy.integrate import quad
 
 from vehicle.wheelrail import creep
 from vehicle.wheelrail.derive_table import derive_default
-from vehicle.wheelrail.geometry import (COLUMNS, DEFAULT_RAIL, DEFAULT_WHEEL,
-                                        ContactGeometry, ContactTable, default_setup)
+from vehicle.wheelrail.geometry import (
+    COLUMNS,
+    DEFAULT_RAIL,
+    DEFAULT_WHEEL,
+    ContactGeometry,
+    ContactTable,
+    default_setup,
+)
 from vehicle.wheelrail.profiles import read_profile, write_simpack_profile
 
 
@@ -92,6 +98,7 @@ def test_rail_and_wheel_placement_match_contact_reference_output():
     assert g.wheel_offset == pytest.approx(751.8726 - 1.8726, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_stored_table_is_reproduced_by_the_derivation(table):
     fresh = derive_default()
     for c in COLUMNS:

@@ -1,4 +1,4 @@
-"""A free wheelset on track with wheel-rail contact forces (issue 11, first multibody step).
+"""A free wheelset on track with wheel-rail contact forces.
 
 Pure force-law checks (no exudyn) first, then the exudyn model against the kinematic wheelset:
 Klingel's wavelength on straight track and the pure-rolling position in a curve.
@@ -11,9 +11,17 @@ import pytest
 from scipy.optimize import brentq
 
 from vehicle.wheelrail import creep
-from vehicle.wheelrail.contact_law import (NUMPY, SCALAR, ContactLawTable, WheelsetParams,
-                                           WheelsetState, force_and_moment, generalized_forces,
-                                           wheel_contact, wheelset_forces)
+from vehicle.wheelrail.contact_law import (
+    NUMPY,
+    SCALAR,
+    ContactLawTable,
+    WheelsetParams,
+    WheelsetState,
+    force_and_moment,
+    generalized_forces,
+    wheel_contact,
+    wheelset_forces,
+)
 from vehicle.wheelrail.geometry import ContactTable
 
 P = WheelsetParams()
