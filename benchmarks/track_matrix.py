@@ -97,7 +97,7 @@ def one(args) -> dict:
     out = {"key": key, "wall_s": time.perf_counter() - t0,
            "outcome": ("DIVERGED" if "impossible state" not in outcome.diverged else "stop") if outcome.diverged else "ok",
            "diagnosis": outcome.diverged or "", "balance_pct": balance(outcome),
-           "dqq_2m_max": row["dqq_2m_max"], "dqq_max": row["dqq_max"]}
+           "dqq_2m_max": row["dqq_2m_max"], "dqq_raw_max": row["dqq_raw_max"]}
     if verify:
         rows = [[outcome.rows[0]]]
         stops = [outcome.diverged]
@@ -139,7 +139,7 @@ def main(argv=None) -> int:
             counts[r["outcome"]] += 1
             g, c, v, R, L = r["key"]
             line = (f"{g:9s} {c:6.4g} {v:5.3g} {R:6.4g} {L:5.3g}: {r['outcome']:8s} "
-                    f"{r['balance_pct']:+7.3f} %  {r['dqq_2m_max']:.3f} ({r['dqq_max']:.3f})  {r['wall_s']:5.1f} s")
+                    f"{r['balance_pct']:+7.3f} %  {r['dqq_2m_max']:.3f} ({r['dqq_raw_max']:.3f})  {r['wall_s']:5.1f} s")
             if args.verify:
                 metric, err = r["verify"]
                 line += (f"  {100 * err:.3f} % ({metric}){'' if err <= 0.005 else '  > 0.5 %'}"

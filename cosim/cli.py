@@ -1,4 +1,4 @@
-"""Command line: ``pneumorail run | check | validate | verify | compare | sweep | presets``.
+"""Command line: ``pneumorail run | check | validate | verify | compare | report | sweep | presets``.
 
 Exit codes: 0 success (for ``check``: every limit holds; for ``verify``: every estimated
 discretisation error within the scenario's ``verify.tolerance``; for ``sweep``: every case
@@ -14,6 +14,7 @@ import logging
 import math
 import signal
 import sys
+import time
 from pathlib import Path
 from typing import List, Optional, Sequence
 
@@ -74,6 +75,7 @@ examples:
   pneumorail verify scenarios/curve_entry.yaml --k 0,inf        # halve every step twice: error estimates
   pneumorail sweep scenarios/curve_entry.yaml --grid curve.speed_m_per_s=8,10,12 --k 0,inf
   pneumorail compare results/twist_dqq results/twist_dqq_1a2b3c4d --wheels 1L,3R
+  pneumorail report results/curve_canted --out curve_canted.html    # one HTML file to hand on
 
 every scenario key: docs/scenario_keys.md; the models: docs/models.md
 """
@@ -99,6 +101,9 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("scenario", type=Path, help="scenario YAML file")
         scenario_options(s, "results/<scenario name>, plus a hash of --set/--k if given")
         s.add_argument("--overwrite", action="store_true", help="replace a previous run in the output folder")
+        if name == "check":
+            s.add_argument("--report", action="store_true",
+                           help="also write report.html (pneumorail report) next to check.json")
     r = sub.add_parser("presets", help="list the named parameter sets, or print one as a YAML file to start from")
     r.add_argument("name", nargs="?", default=None, help="a preset name: print it (e.g. > mycar.yaml)")
     a = sub.add_parser("validate", help="check scenario or sweep files completely without running them (exit 0 or 2)")
@@ -129,9 +134,13 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--check", action="store_true",
                    help="evaluate the base scenario's checks: in every case; exit 1 naming the cases that fail")
     w.add_argument("--quiet", action="store_true", help="no progress lines")
+    o = sub.add_parser("report", help="one self-contained HTML report of one or more runs (side by side)")
+    o.add_argument("dirs", type=Path, nargs="+", help="output folders of runs, checks or verify")
+    o.add_argument("--out", type=Path, default=None, help="the HTML file (default: report.html in the first folder)")
     c = sub.add_parser("compare", help="overlay the results of several runs")
     c.add_argument("dirs", type=Path, nargs="+", help="output folders of earlier runs")
-    c.add_argument("--out", type=Path, default=Path("results/compare"), help="folder for the comparison plots")
+    c.add_argument("--out", type=Path, default=None,
+                   help="folder for the comparison plots (default: beside the first run, compare_<its name>)")
     c.add_argument("--wheels", type=_argument("parse_wheels"), default=None, metavar="LIST",
                    help="twist: the wheels to show, e.g. 1L,3R (default: 1L 1R 4L 4R and the worst wheel)")
     c.add_argument("--k", type=_k_list, default=None, help="only these k values [W/K], e.g. 0,inf")
@@ -148,8 +157,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             from cosim.kinds import overlays
             from cosim.results.compare import Selection, compare_runs
             select = Selection(args.wheels, tuple(args.k) if args.k else None, args.time)
-            for path in compare_runs(args.dirs, args.out, overlays(), select):
+            out = args.out or args.dirs[0].resolve().parent / f"compare_{args.dirs[0].resolve().name}"
+            for path in compare_runs(args.dirs, out, overlays(), select):
                 print(path)
+            return EXIT_OK
+        if args.command == "report":
+            from cosim.results.report import write_report
+            t0 = time.perf_counter()
+            path = write_report(args.dirs, args.out)
+            print(f"report in {path} ({time.perf_counter() - t0:.2f} s)")
             return EXIT_OK
         if args.command == "validate":
             return _validate(args)
@@ -352,6 +368,9 @@ def _run(args) -> int:
     if args.command == "check":
         print(outcome.check_report())
         print(f"verdict in {out}/check.json and check.xml (JUnit)")
+        if args.report:
+            from cosim.results.report import write_report
+            print(f"report in {write_report([out])}")
         return EXIT_OK if outcome.checks_hold() else EXIT_FAILED
     return EXIT_FAILED if outcome.diverged else EXIT_OK
 

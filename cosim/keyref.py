@@ -70,7 +70,8 @@ Generated from the code by `python -m cosim.keyref > docs/scenario_keys.md` (a t
 this file is stale). Every key is optional unless the scenario kind needs it; a missing key takes
 the default shown. Units are in the names (SI: Pa absolute, K, kg, m, s, N, W/K). Top-level keys
 of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is isothermal),
-`checks` (car scenarios: e.g. `dqq_max <= 0.6`, `dqq_max[3R] <= 0.6`, `dqq_max[k=0] <= 0.6`).
+`checks` (car scenarios: e.g. `dqq_max <= 0.6`, `dqq_max[3R] <= 0.6`, `dqq_max[k=0] <= 0.6`,
+`yq_2m_p9985[zone=R<250] <= 1.2`; docs/assessment.md).
 The rig kinds take `circuit: {bellow, tank, pipe, p0_Pa}` and `test`; the car kinds (`twist`,
 `curve_entry`) take `vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the
 sections below, or an explicit `components:` mapping of named components with a `type`),

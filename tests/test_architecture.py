@@ -82,6 +82,8 @@ def test_every_kind_declares_what_the_application_needs():
             for hook in ("parse", "duration_s", "valve_settings", "make_car"):
                 assert callable(getattr(code, hook)), (kind.name, hook)
             assert set(kind.wheel_metrics) <= set(kind.check_metrics), kind.name
+            assert set(kind.zone_metrics) <= set(kind.check_metrics), kind.name
+            assert not kind.zone_metrics or callable(code.zones), kind.name
         else:
             assert callable(code.load), kind.name
         assert getattr(code, "KIND", None) is kind or kind in getattr(code, "KINDS", ()), kind.name

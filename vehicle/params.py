@@ -210,6 +210,18 @@ class VehicleParams:
     # emergency spring, ~10 MN/m. 0: no stop.
     vertical_bumpstop_stiffness_N_per_m: float = 0.0
 
+    @property
+    def bogie_x_m(self) -> tuple:
+        """x [m] of the bogie centres from the car centre, front then rear."""
+        xb = self.bogie_centre_distance_m / 2.0
+        return (xb, -xb)
+
+    @property
+    def wheelset_x_m(self) -> tuple:
+        """x [m] of the wheelset centres from the car centre, wheelsets 1 ... 4 from the front."""
+        a = self.wheelbase_m / 2.0
+        return tuple(xb + sign * a for xb in self.bogie_x_m for sign in (1.0, -1.0))
+
 
 @dataclass(frozen=True)
 class ContactParams:

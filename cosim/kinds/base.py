@@ -14,6 +14,7 @@ Functions a kind module provides (``Kind.module`` names it; imported when needed
 * ``duration_s(experiment)``, ``valve_settings(experiment, valves)``: how long a car run lasts,
   and its valve settings (``valves``: ``circuit.valves``);
 * ``make_car(scenario)``: the car of a car kind (a picklable module-level function);
+* ``zones(experiment) -> (zone, ...)``: the track's test zones (kinds with ``zone_metrics``);
 * ``refuse_check(metric, experiment) -> reason or None``: a checkable metric the scenario's
   experiment cannot give (e.g. lateral wheel forces without wheel-rail contact);
 * ``compare(infos, out_dir, select, label, window) -> [Path]``: overlays of several runs' time
@@ -49,6 +50,9 @@ class Kind:
         The metrics ``checks:`` may name (each the largest over the selected cases).
     wheel_metrics : tuple of str
         Those of them that can name a wheel (``dqq_max[3R]``).
+    zone_metrics : tuple of str
+        Those of them that can name a test zone of the track (``yq_2m_p9985[zone=R<250]``); the
+        module's ``zones(experiment)`` lists the zones its track has.
     headline_metrics : tuple of str
         The summary columns ``verify`` estimates the discretisation error of.
     plot_metrics : tuple of str
@@ -64,6 +68,7 @@ class Kind:
     car: bool = False
     check_metrics: Tuple[str, ...] = ()
     wheel_metrics: Tuple[str, ...] = ()
+    zone_metrics: Tuple[str, ...] = ()
     headline_metrics: Tuple[str, ...] = ()
     plot_metrics: Tuple[str, ...] = ()
     k_fixed: str = ""

@@ -10,17 +10,19 @@ import functools
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Mapping, Optional, Tuple
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 import xarray as xr
 
 from cosim.errors import ScenarioError
+from cosim.kinds import en14363
 from cosim.kinds.base import Kind
 from cosim.kinds.car import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
+from cosim.limits.assessment import STEP_M
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, window_mean
-from cosim.results.io import Progress
+from cosim.results.io import Progress, read_rows
 from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection, case_series
 from cosim.results.plots import Curve, Figure, Panel, save_panels
@@ -39,11 +41,8 @@ MAX_SPEED_M_PER_S = 100.0
 #: wheelset guidance of a curve run (vehicle.car.MetroCar ``guidance``)
 GUIDANCE = ("kinematic", "contact")
 #: checkable metrics of the lateral wheel-rail forces: they need ``curve.guidance: contact``
-CONTACT_METRICS = ("yq_max", "sum_y_max")
+CONTACT_METRICS = ("yq_max", "sum_y_max", "yq_2m_p9985", "sum_y_2m_p9985", "Y_2m_p50")
 
-
-#: wheelset guidance of a curve run (vehicle.car.MetroCar ``guidance``)
-GUIDANCE = ("kinematic", "contact")
 
 
 @dataclass(frozen=True)
@@ -315,7 +314,14 @@ def refuse_check(metric: str, curve: CurveTest) -> Optional[str]:
     if metric in CONTACT_METRICS and not curve.contact:
         return (f"{metric} needs curve.guidance: contact (with {curve.guidance} guidance no lateral wheel-rail force "
                 f"is computed)")
+    if metric in en14363.QUASI_STATIC and not any(z in en14363.CURVE_ZONES for z in zones(curve)):
+        return f"{metric} is a quasi-static value of a curve R < 600 m, and this track has none (R = {curve.radius_m:g} m)"
     return None
+
+
+def zones(curve: CurveTest) -> Tuple[str, ...]:
+    """The test zones of the curve's track (:mod:`cosim.limits.assessment`), in track order."""
+    return tuple(dict.fromkeys(en14363.zone_table(curve.track())[1]))
 
 
 def make_car(scenario: Scenario):
@@ -363,8 +369,8 @@ def wheel_rail_series(ds: xr.Dataset, curve: CurveTest) -> None:
     t = ds["time"].values
     add_wheel_unloading(ds)
     W = sliding_window_s(curve)
-    ds["dqq_2m"] = _attrs(_over_time(ds["dqq"], lambda v: sliding_mean(t, v, W)), units="1",
-                          long_name=f"ΔQ/Q0 per wheel, sliding mean over {SLIDING_MEAN_M:g} m")
+    ds["dqq_2m"] = with_column(_over_time(ds["dqq"], lambda v: sliding_mean(t, v, W)), "dqq_2m_{}", "1",
+                               f"ΔQ/Q0 per wheel, sliding mean over {SLIDING_MEAN_M:g} m")
     if "lateral_wheel_force_N" not in ds:
         return
     Q = ds["wheel_load_N"]
@@ -387,12 +393,17 @@ def car_centre_s_m(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
 
 
 def track_roll_rad(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
-    """Roll [rad] of the track plane at the car centre, in the carbody roll's convention (right
-    hand about the forward axis, positive = left side up). ``TrackGeometry.cant_rad(s)`` is
-    signed like the curvature, positive raising the right rail (a left-hand curve's outer rail;
-    MetroCar._rail_at lowers the left rail and raises the right one by b sin(cant)): the plane's
-    roll is minus it."""
-    return -np.asarray(scenario.curve.track().cant_rad(car_centre_s_m(scenario, t_s)), dtype=float)
+    """Roll [rad] of the track plane under the car: the mean of the design cant at the two bogie
+    centres (the carbody rests on the bogies, so this is the plane it would settle parallel to; at
+    the car centre alone the reference kinks where the centre passes a cant ramp's end while the
+    bogies do not), in the carbody roll's convention (right hand about the forward axis, positive =
+    left side up). ``TrackGeometry.cant_rad(s)`` is signed like the curvature, positive raising the
+    right rail (a left-hand curve's outer rail): the plane's roll is minus it."""
+    track = scenario.curve.track()
+    s = car_centre_s_m(scenario, t_s)
+    cants = [np.asarray(track.cant_rad(np.clip(s + x, 0.0, track.total_length_m)), dtype=float)
+             for x in scenario.vehicle.bogie_x_m]
+    return -0.5 * (cants[0] + cants[1])
 
 
 def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
@@ -403,7 +414,7 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
     ds, diagnoses = simulate_cases(scenario, curve.valve_settings, make_car, curve.duration_s, progress)
     plane = track_roll_rad(scenario, ds["time"].values)
     ds["roll_track_plane_rad"] = with_column(xr.DataArray(plane, dims="time"), "roll_track_plane_rad", "rad",
-                                             "roll of the track plane at the car centre")
+                                             "roll of the track plane under the car (mean of the bogie centres)")
     ds["roll_rel_rad"] = with_column(ds["roll_rad"] - ds["roll_track_plane_rad"], "roll_carbody_rel_track_rad", "rad",
                                      "carbody roll relative to the track plane")
     wheel_rail_series(ds, curve)
@@ -415,10 +426,6 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
     return ds, diagnoses
 
 
-#: summary columns of the curve's headline metrics, contact guidance only
-CONTACT_COLUMNS = ("yq_max", "sum_y_max_N")
-
-
 def run(scenario: Scenario, progress: Progress) -> Outcome:
     """The curve entry: every case, its summary row (:func:`summary_row`) and checkable metrics."""
     t0 = time.perf_counter()
@@ -428,23 +435,31 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
              f"{', irregular track' if curve.irregularity else ''}; {len(scenario.k_W_per_K)} k values x valves "
              f"{curve.valve_settings}")
     ds, diagnoses = simulate(scenario, progress)
-    rows, cases = [], []
+    rows, cases, statistics, assessed = [], [], [], []
+    s_centre = car_centre_s_m(scenario, ds["time"].values)
     for j in range(ds.sizes["case"]):
         case = ds.isel(case=j)
         row = summary_row(case, curve)
+        stats, found = en14363.assess_case(
+            case, s_centre, curve.track(), scenario.vehicle, nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction),
+            prudhomme_limit_N(float(case["Q0_N"].min()), curve.prudhomme_alpha))
+        row.update(en14363.summary_columns(found))
         rows.append(row)
-        cases.append(case_metrics(row))
-    headline = ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg", "dqq_max",
-                "dqq_2m_max")
-    headline += CONTACT_COLUMNS if curve.contact else ()
+        cases.append(case_metrics(row, en14363.zone_metrics(found, stats)))
+        statistics += en14363.statistics_rows(stats, row["valves"], row["k_W_per_K"])
+        assessed += en14363.limit_rows(found, row["valves"], row["k_W_per_K"])
+    headline = [m for m in KIND.headline_metrics if rows and m in rows[0]]
     metrics = {m: largest(r[m] for r in rows) for m in headline} if rows else {}
-    shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg")
+    shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg",
+             "dqq_2m_p9985", "Q_2m_p9985_N")
     if curve.contact:
-        shown += ("dqq_max", "dqq_2m_max") + CONTACT_COLUMNS
+        shown += ("yq_2m_p9985", "sum_y_2m_p9985_N")
+    shown += ("en14363_failed",)
     info = {"window_s": curve.window, "guidance": curve.guidance}
+    info.update(sliding_mean_m=SLIDING_MEAN_M, assessment_step_m=STEP_M,
+                zones=list(en14363.zones_run(curve.track(), scenario.vehicle, s_centre[[0, -1]])))
     if curve.contact:
-        info.update(sliding_mean_m=SLIDING_MEAN_M, yq_lim=rows[0]["yq_lim"] if rows else None,
-                    sum_y_lim_N=rows[0]["sum_y_lim_N"] if rows else None)
+        info.update(yq_lim=rows[0]["yq_lim"] if rows else None, sum_y_lim_N=rows[0]["sum_y_lim_N"] if rows else None)
     if curve.irregularity is not None:
         info["irregularity"] = curve.track_irregularity(scenario.vehicle).source
     warnings: List[str] = []
@@ -452,10 +467,11 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     if step:
         warn(warnings, f"the linear cant ramp steps the rails' roll rate by {step:.3g} rad/s where a wheelset "
                        f"enters and leaves it (curve.transition_shape: linear): that rings each wheelset on its "
-                       f"contacts (~240 Hz on a rigid track), beyond the step, so sampled peaks there (dqq_max, Y_max_N) depend "
-                       f"on the step; the 2 m means hold better. transition_shape: bloss or cosine has no step")
+                       f"contacts (~240 Hz on a rigid track), beyond the step, so sampled peaks there (dqq_raw_max, "
+                       f"Y_raw_max_N) depend on the step; the 2 m means hold better. transition_shape: bloss or cosine has "
+                       f"no step")
     return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, warnings, info,
-                   time.perf_counter() - t0)
+                   time.perf_counter() - t0, tables={"assessment": statistics, "assessment_limits": assessed})
 
 
 def ramp_roll_rate_step_rad_per_s(curve: CurveTest) -> float:
@@ -466,15 +482,16 @@ def ramp_roll_rate_step_rad_per_s(curve: CurveTest) -> float:
     return curve.speed_m_per_s * abs(curve.cant_rad) / curve.transition_m
 
 
-def case_metrics(row: Dict[str, object]) -> CaseMetrics:
+def case_metrics(row: Dict[str, object], zoned: Dict[str, Dict[str, Dict[str, float]]]) -> CaseMetrics:
     """The checkable metrics of a summary row (:attr:`KIND.check_metrics <cosim.kinds.base.Kind.check_metrics>`): the wheel
-    metrics per wheel; ``yq_max`` and ``sum_y_max`` [N] only with contact guidance."""
+    metrics per wheel; ``yq_max`` and ``sum_y_max`` [N] only with contact guidance; the EN 14363
+    assessment's per zone and wheel (``zoned``, :func:`cosim.kinds.en14363.zone_metrics`)."""
     values = {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}
-    wheels = {m: {w: row[f"{m}_{w}"] for w in WHEELS} for m in ("dqq_max", "dqq_2m_max")}
+    wheels = {m: {w: row[f"{m}_{w}"] for w in WHEELS} for m in ("dqq_raw_max", "dqq_2m_max")}
     if "yq_max" in row:
         values["sum_y_max"] = row["sum_y_max_N"]
         wheels["yq_max"] = {w: row[f"yq_max_{w}"] for w in WHEELS}
-    return CaseMetrics(row["k_W_per_K"], row["valves"], values, wheels)
+    return CaseMetrics(row["k_W_per_K"], row["valves"], values, wheels, zoned)
 
 
 def _largest_after(t: np.ndarray, values: np.ndarray, t_from: float) -> np.ndarray:
@@ -528,8 +545,8 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     """The running-safety columns of one case (``case``: the Dataset of :func:`simulate` at one
     case, with :func:`wheel_rail_series`):
 
-    * ``dqq_max_<wheel>``, ``dqq_max``: the largest ΔQ/Q0 over the run (sampled values, no
-      filter), per wheel and over the wheels (both guidances; kinematic Q is vertical, contact Q
+    * ``dqq_raw_max_<wheel>``, ``dqq_raw_max``: the largest sampled ΔQ/Q0 over the run (raw: no
+      filter, no mean), per wheel and over the wheels (both guidances; kinematic Q is vertical, contact Q
       normal to the track plane); ``dqq_2m_max_<wheel>``, ``dqq_2m_max``: the same for its 2 m
       sliding mean (the sampled peak of a flange impact's ~45 Hz ringing depends on where the
       samples fall: on the R = 150 m twisted curve it moves by 9 % as the steps are halved,
@@ -538,7 +555,7 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     with contact guidance also, the 2 m sliding means (EN 14363) counted from the first whole
     window on:
 
-    * ``Y_max_<wheel>_N``, ``Y_max_N``: the largest Y (sampled, + towards the track centre);
+    * ``Y_raw_max_<wheel>_N``, ``Y_raw_max_N``: the largest sampled Y (raw; + towards the track centre);
     * ``yq_max_<wheel>``, ``yq_max``: the largest (Y/Q)_2m, against ``yq_lim`` (Nadal,
       :func:`cosim.limits.criteria.nadal_limit`);
     * ``sum_y_max_<wheelset>_N``, ``sum_y_max_N``: the largest |ΣY_2m| per wheelset and over
@@ -553,8 +570,8 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     t_full = t[0] + sliding_window_s(curve)
     dqq = case["dqq"].transpose("time", "wheel").values
     worst = dqq.max(axis=0)
-    row: Dict[str, object] = {f"dqq_max_{w}": float(v) for w, v in zip(WHEELS, worst)}
-    row["dqq_max"] = largest(worst)
+    row: Dict[str, object] = {f"dqq_raw_max_{w}": float(v) for w, v in zip(WHEELS, worst)}
+    row["dqq_raw_max"] = largest(worst)
     worst = _largest_after(t, case["dqq_2m"].transpose("time", "wheel").values, t_full)
     row.update({f"dqq_2m_max_{w}": float(v) for w, v in zip(WHEELS, worst)})
     row["dqq_2m_max"] = largest(worst)
@@ -562,8 +579,8 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
         return row
     Y = case["lateral_wheel_force_N"].transpose("time", "wheel").values
     Y_max = Y.max(axis=0)
-    row.update({f"Y_max_{w}_N": float(v) for w, v in zip(WHEELS, Y_max)})
-    row["Y_max_N"] = largest(Y_max)
+    row.update({f"Y_raw_max_{w}_N": float(v) for w, v in zip(WHEELS, Y_max)})
+    row["Y_raw_max_N"] = largest(Y_max)
     yq = _largest_after(t, case["y_over_q_2m"].transpose("time", "wheel").values, t_full)
     row.update({f"yq_max_{w}": float(v) for w, v in zip(WHEELS, yq)})
     row["yq_max"] = largest(yq)
@@ -652,25 +669,65 @@ def record_headlines(scenario: Scenario, rec: Dict[str, np.ndarray], j: int = 0,
             "air_exhausted_kg": float(rec["air_to_atmosphere_kg"][-1, j])}
 
 
+def _worst(run_dirs, columns: Sequence[str]) -> Optional[str]:
+    """The label (wheel or wheelset) whose summary column ``<metric>_<label>...`` is largest over
+    the runs' cases; ``columns``: (label, column) pairs."""
+    best, where = -np.inf, None
+    for d in run_dirs:
+        for row in read_rows(d / "summary.csv") if (d / "summary.csv").exists() else []:
+            for label, column in columns:
+                try:
+                    value = float(row.get(column, "nan"))
+                except ValueError:
+                    continue
+                if value > best:
+                    best, where = value, label
+    return where
+
+
 def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
-    """Overlay the carbody roll (to the track plane) and the air injected of several curve runs."""
-    panels = []
-    for column, scale, ylabel in (("roll_carbody_rel_track_rad", 1e3, "carbody roll to the track plane [mrad]"),
-                                  ("air_from_supply_kg", 1e3, "air injected from the supply [g]")):
+    """Overlay the carbody roll (to the track plane) and the air injected of several curve runs;
+    with contact guidance also (ΔQ/Q0)_2m and (Y/Q)_2m of the worst wheel and (ΣY)_2m of the
+    worst wheelset over the runs (or of the wheels ``select.wheels`` names)."""
+    run_dirs = [d for d, _ in infos]
+
+    def panel(column, scale, ylabel, title="", hlines=()):
         curves = [Curve(data["t_s"], data[column] * scale, label(d, case))
-                  for d, _ in infos for case, data in case_series(d, "curve_", select) if column in data.dtype.names]
-        panels.append(Panel(curves, "time t [s]", ylabel))
+                  for d in run_dirs for case, data in case_series(d, "curve_", select) if column in data.dtype.names]
+        return Panel(curves, "time t [s]", ylabel, title, hlines=list(hlines)) if curves else None
+
+    panels = [panel("roll_carbody_rel_track_rad", 1e3, "carbody roll to the track plane [mrad]"),
+              panel("air_from_supply_kg", 1e3, "air injected from the supply [g]")]
+    info = infos[0][1]
+    nadal = [(info["yq_lim"], f"Nadal limit {info['yq_lim']:.2f}")] if info.get("yq_lim") else []
+    prud = ([(sign * info["sum_y_lim_N"] * 1e-3, "Prud'homme limit") for sign in (1.0, -1.0)]
+            if info.get("sum_y_lim_N") else [])
+    for column, name, ranked, limit in (("dqq_2m_{}", "(ΔQ/Q0)_2m", "dqq_2m_max_{}", []),
+                                        ("YQ_2m_{}", "(Y/Q)_2m", "yq_max_{}", nadal)):
+        worst = _worst(run_dirs, [(w, ranked.format(w)) for w in WHEELS])
+        for w in select.wheels or ((worst,) if worst else ()):
+            tag = f"wheel {w}" + (" (the worst)" if w == worst else "")
+            panels.append(panel(column.format(w), 1.0, f"{name}, wheel {w} [-]", tag, limit))
+    ws = _worst(run_dirs, [(n, f"sum_y_max_{n}_N") for n in WHEELSETS])
+    if ws is not None:
+        panels.append(panel(f"sumY_2m_{ws}_N", 1e-3, f"(ΣY)_2m, wheelset {ws} [kN]", f"wheelset {ws} (the worst)",
+                            prud))
+    panels = [p for p in panels if p is not None]
     return [save_panels(out_dir / "compare_curve.png", panels, f"Curve entry comparison{window}", ncols=2)]
 
 
 KIND = Kind("curve_entry", "curve", CurveTest, __name__, car=True,
-            check_metrics=("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "yq_max", "sum_y_max", "dqq_max",
-                           "dqq_2m_max"),
-            wheel_metrics=("dqq_max", "yq_max", "dqq_2m_max"),
-            # the processed quantities an engineer is judged by: EN 14363's 2 m sliding means, the
-            # roll (largest, and its mean over the final window), the air; not the raw sampled peaks
-            # of ΔQ/Q0 and Y (dqq_max, Y_max_N: one sample of a transient the step may not resolve);
-            # yq_max and sum_y_max_N only with contact guidance (a column that is absent is skipped)
+            check_metrics=("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "yq_max", "sum_y_max", "dqq_raw_max",
+                           "dqq_2m_max", *en14363.METRICS),
+            wheel_metrics=("dqq_raw_max", "yq_max", "dqq_2m_max",
+                           *(m for m, (q, _, _) in en14363.METRICS.items() if en14363.QUANTITIES[q][1] == "wheel")),
+            zone_metrics=tuple(en14363.METRICS),
+            # the processed quantities an engineer is judged by: EN 14363's statistics of the 2 m
+            # means along the track (cosim.kinds.en14363), the roll (largest, and its mean over the
+            # final window), the air; not the raw sampled peaks (dqq_raw_max, Y_raw_max_N: one sample
+            # of a transient the step may not resolve); a column that is absent (yq_2m_p9985 and
+            # sum_y_2m_p9985_N without contact, Y_2m_p50_N without an arc R < 600 m) is skipped
             headline_metrics=("roll_max_rad", "roll_end_rad", "roll_mean_end_rad", "air_injected_kg",
-                              "air_exhausted_kg", "dqq_2m_max", "yq_max", "sum_y_max_N"),
+                              "air_exhausted_kg", "dqq_2m_p9985", "Q_2m_p9985_N", "Q_2m_p50_N", "Y_2m_p50_N",
+                              "yq_2m_p9985", "sum_y_2m_p9985_N"),
             plot_metrics=("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg"))

@@ -19,15 +19,23 @@ from cosim.scenario.schema import k_label
 class CaseMetrics:
     """The checkable metrics of one case (a k value with a valve setting): ``values`` metric ->
     value; ``wheels`` metric -> wheel -> value for the per-wheel ones (their ``values`` entry,
-    if any, is ignored: the largest over the wheels is taken from ``wheels``)."""
+    if any, is ignored: the largest over the wheels is taken from ``wheels``); ``zones`` metric ->
+    test zone -> wheel (or wheelset) -> value for the per-zone ones."""
 
     k: float
     valves: bool
     values: Dict[str, float] = field(default_factory=dict)
     wheels: Dict[str, Dict[str, float]] = field(default_factory=dict)
+    zones: Dict[str, Dict[str, Dict[str, float]]] = field(default_factory=dict)
 
-    def candidates(self, metric: str, wheel: Optional[str] = None) -> List[Tuple[float, Optional[str]]]:
-        """(value, wheel) pairs the metric takes in this case (one wheel, every wheel, or none)."""
+    def candidates(self, metric: str, wheel: Optional[str] = None,
+                   zone: Optional[str] = None) -> List[Tuple[float, Optional[str]]]:
+        """(value, where) pairs the metric takes in this case (one wheel, every wheel, or none;
+        for a per-zone metric one zone or every zone)."""
+        if metric in self.zones:
+            return [(v, f"{z}, {'wheel' if who[-1].isalpha() else 'wheelset'} {who}")
+                    for z, per in self.zones[metric].items() if zone is None or z == zone
+                    for who, v in per.items() if wheel is None or who == wheel]
         if metric in self.wheels:
             per_wheel = self.wheels[metric]
             return [(per_wheel[wheel], wheel)] if wheel is not None else list((v, w) for w, v in per_wheel.items())
@@ -40,10 +48,10 @@ def check_value(check: Check, cases: Sequence[CaseMetrics], totals: Dict[str, fl
     it was found (e.g. ``k = 0, valves off, wheel 3R``). Without cases, a check without
     selectors is evaluated on ``totals``."""
     if not cases:
-        plain = check.wheel is None and check.k is None and check.valves is None
+        plain = check.wheel is None and check.k is None and check.valves is None and check.zone is None
         return ((totals or {}).get(check.metric, math.nan) if plain else math.nan), ""
     found = [(v, case, w) for case in cases if check.selects(case.k, case.valves)
-             for v, w in case.candidates(check.metric, check.wheel)]
+             for v, w in case.candidates(check.metric, check.wheel, check.zone)]
     if not found:
         return math.nan, "no case"
     if any(math.isnan(v) for v, _, _ in found):
@@ -54,7 +62,7 @@ def check_value(check: Check, cases: Sequence[CaseMetrics], totals: Dict[str, fl
     if len({c.valves for c in cases}) > 1 or check.valves is not None:
         where.append(f"valves {'on' if case.valves else 'off'}")
     if w is not None:
-        where.append(f"wheel {w}")
+        where.append(w if "," in w else f"wheel {w}")
     return float(v), ", ".join(where)
 
 

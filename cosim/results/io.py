@@ -138,6 +138,7 @@ def write_run_json(out_dir: Path, scenario, wall_s: float, status: str = "comple
         "scenario_sha256": scenario.content_sha256,
         "files_sha256": dict(getattr(scenario, "files_sha256", ())),
         "kind": scenario.kind,
+        "section": getattr(scenario, "section", None),
         "name": scenario.name,
         "overrides": list(scenario.overrides),
         "k_W_per_K": [k_label(k) for k in scenario.k_W_per_K],

@@ -50,6 +50,9 @@ class Outcome:
     interrupted : bool
         The run was stopped by Ctrl-C or SIGTERM (:mod:`cosim.interrupts`): its results end
         there (``run.json``: status ``interrupted``).
+    tables : dict of str to list of dict
+        Further tables by name, rows of columns with units (e.g. ``assessment``: the EN 14363
+        statistics per zone and wheel); ``<name>.csv``.
     """
 
     scenario: Scenario
@@ -63,6 +66,7 @@ class Outcome:
     info: Dict[str, object] = field(default_factory=dict)
     wall_s: float = 0.0
     interrupted: bool = False
+    tables: Dict[str, List[Dict[str, object]]] = field(default_factory=dict)
 
     @property
     def diverged(self) -> Optional[str]:

@@ -67,11 +67,25 @@ def curve_style(i: int) -> Tuple[str, str]:
 
 
 def save_panels(path: Path, panels: Sequence[Panel], suptitle: Optional[str] = None, ncols: int = 1) -> Path:
+    """Draw the panels (:func:`draw_panels`) into the PNG ``path``."""
+    plt = pyplot()
+    fig = draw_panels(panels, suptitle, ncols)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def draw_panels(panels: Sequence[Panel], suptitle: Optional[str] = None, ncols: int = 1):
+    """A matplotlib figure of the panels, ``ncols`` to a row, each legend to the right of its axes."""
     nrows = -(-len(panels) // ncols)
     title_in = 0.2 * (suptitle.count("\n") + 1) + 0.1 if suptitle else 0.0   # room for the title lines [in]
     height_in = 3.6 * nrows + title_in
     plt = pyplot()
-    fig, axes = plt.subplots(nrows, ncols, figsize=(7.5 * ncols, height_in), squeeze=False)
+    # each panel's legend sits to the right of its axes, never over the traces
+    longest = max([len(c.label) for panel in panels for c in panel.curves] + [0])
+    legend_in = min(0.065 * longest + 0.6, 3.5) if longest else 0.0
+    fig, axes = plt.subplots(nrows, ncols, figsize=((7.5 + legend_in) * ncols, height_in), squeeze=False)
     for ax, panel in zip(axes.ravel(), panels):
         for i, c in enumerate(panel.curves):
             colour, dashes = curve_style(i)
@@ -94,17 +108,15 @@ def save_panels(path: Path, panels: Sequence[Panel], suptitle: Optional[str] = N
             ax.set_title(panel.title, fontsize=10)
         ax.grid(True, alpha=0.3)
         if panel.curves:
-            ax.legend(fontsize=8, ncol=2)
+            ax.legend(fontsize=8, ncol=1 if len(panel.curves) <= 14 else 2, loc="upper left",
+                      bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     for ax in axes.ravel()[len(panels):]:
         ax.set_visible(False)
     if suptitle:
         fig.suptitle(suptitle, fontsize=11)
     # tight layout below the title (constrained layout does the same at twice the cost)
     fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - title_in / height_in))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return fig
 
 
 def k_legend(k: float) -> str:

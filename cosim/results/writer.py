@@ -1,5 +1,5 @@
 """Turn an :class:`~cosim.results.outcome.Outcome` into files: the time series (CSV, one file per case),
-``summary.csv``, the figures (PNG) and ``run.json`` (provenance, status, metrics, diagnoses,
+``summary.csv`` and the outcome's further tables (``<name>.csv``), the figures (PNG) and ``run.json`` (provenance, status, metrics, diagnoses,
 warnings), in that order; every file is written atomically."""
 from __future__ import annotations
 
@@ -28,6 +28,8 @@ def write_outcome(outcome: Outcome, out: Path, figures: Sequence[Figure] = (), j
         else:
             write_columns(out / "timeseries" / f"{name}.csv", case_columns(ds))
     write_rows(out / "summary.csv", outcome.rows)
+    for name, rows in outcome.tables.items():
+        write_rows(out / f"{name}.csv", rows)
     flagged = sorted({f for r in outcome.rows for f in str(r.get("validity", "ok")).split(";")} - {"ok", ""})
     if flagged:
         note = f"[outside the model's validity in some cases: {', '.join(flagged)}; see summary.csv, column validity]"

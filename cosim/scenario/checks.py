@@ -15,10 +15,11 @@ from vehicle.params import WHEELS
 
 @dataclass(frozen=True)
 class Check:
-    """A threshold on a summary metric, e.g. ``dqq_max <= 0.6``, optionally for one wheel, one k
-    and one valve setting: ``dqq_max[3R] <= 0.6``, ``dqq_qs_max[k=0, valves=on] <= 0.6``. The
-    value checked is the largest over the cases (k, valve setting) and wheels the selectors
-    leave (no selector: over all of them)."""
+    """A threshold on a summary metric, e.g. ``dqq_max <= 0.6``, optionally for one wheel, one k,
+    one valve setting and one test zone of the track: ``dqq_max[3R] <= 0.6``,
+    ``dqq_qs_max[k=0, valves=on] <= 0.6``, ``yq_2m_p9985[zone=R<250] <= 1.2``. The value checked
+    is the largest over the cases (k, valve setting), wheels and zones the selectors leave (no
+    selector: over all of them)."""
 
     metric: str
     op: str
@@ -27,6 +28,7 @@ class Check:
     wheel: Optional[str] = None
     k: Optional[float] = None
     valves: Optional[bool] = None
+    zone: Optional[str] = None
 
     def holds(self, value: float) -> bool:
         return {"<=": value <= self.limit, "<": value < self.limit, ">=": value >= self.limit,
@@ -40,7 +42,7 @@ class Check:
 _NUMBER = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?\d+)?"
 _CHECK = re.compile(r"^\s*([A-Za-z_]\w*)\s*((?:\[[^\[\]]*\]\s*)*)(<=|<|>=|>)\s*(" + _NUMBER + r")\s*$")
 _SELECTOR = re.compile(r"^\s*(?:(?P<wheel>[0-9]+[A-Za-z]+)|k\s*=\s*(?P<k>" + _NUMBER + r"|[-+]?\.?inf(?:inity)?)"
-                       r"|valves\s*=\s*(?P<valves>on|off|true|false))\s*$", re.IGNORECASE)
+                       r"|valves\s*=\s*(?P<valves>on|off|true|false)|zone\s*=\s*(?P<zone>[^,]+?))\s*$", re.IGNORECASE)
 
 
 
@@ -57,7 +59,9 @@ def parse_checks(value, kind, experiment, file, k_values: Sequence[float] = (),
                  valve_settings: Sequence[bool] = ()) -> Tuple[Check, ...]:
     """``metric[selectors] op number``; selectors (comma-separated, in one or more brackets): a
     wheel (1L ... 4R, for the kind's per-wheel metrics), ``k=<value>`` (one of the scenario's k
-    values, ``inf`` for isothermal) and ``valves=on|off`` (one of its valve settings). ``kind``:
+    values, ``inf`` for isothermal), ``valves=on|off`` (one of its valve settings) and
+    ``zone=<zone>`` (a test zone of the track, for the kind's per-zone metrics:
+    :mod:`cosim.limits.assessment`). ``kind``:
     the scenario's :class:`~cosim.kinds.base.Kind` (its ``check_metrics`` and ``wheel_metrics``;
     its module's ``refuse_check(metric, experiment)`` refuses a metric the experiment cannot give,
     e.g. lateral wheel forces without wheel-rail contact)."""
@@ -84,8 +88,9 @@ def parse_checks(value, kind, experiment, file, k_values: Sequence[float] = (),
             sel = _SELECTOR.match(item)
             if not sel:
                 raise ScenarioError(file, where, f"unknown selector {item.strip()!r} in {text!r} (expected a wheel "
-                                                 f"{WHEELS[0]} ... {WHEELS[-1]}, k=<value> or valves=on|off)")
-            name = next(n for n in ("wheel", "k", "valves") if sel.group(n) is not None)
+                                                 f"{WHEELS[0]} ... {WHEELS[-1]}, k=<value>, valves=on|off or "
+                                                 f"zone=<test zone>)")
+            name = next(n for n in ("wheel", "k", "valves", "zone") if sel.group(n) is not None)
             if name in chosen:
                 raise ScenarioError(file, where, f"{name} selected twice in {text!r}")
             raw = sel.group(name)
@@ -103,6 +108,16 @@ def parse_checks(value, kind, experiment, file, k_values: Sequence[float] = (),
                     raise ScenarioError(file, where, f"k = {raw} is not one of the scenario's k values "
                                                      f"({', '.join(k_label(v) for v in k_values)})")
                 chosen[name] = k
+            elif name == "zone":
+                zone = raw.strip()
+                if metric not in kind.zone_metrics:
+                    raise ScenarioError(file, where, f"{metric} is not assessed per test zone: no zone selector "
+                                                     f"(per zone: {', '.join(kind.zone_metrics) or 'none'})")
+                present = kind.code.zones(experiment)
+                if zone not in present:
+                    raise ScenarioError(file, where, f"zone {zone!r} is not a test zone of this track (its zones: "
+                                                     f"{', '.join(present)})")
+                chosen[name] = zone
             else:
                 on = raw.lower() in ("on", "true")
                 if on not in valve_settings:

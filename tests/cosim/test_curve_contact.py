@@ -129,7 +129,7 @@ def test_steady_canted_arc_rails_carry_the_unbalanced_centripetal_force(tmp_path
     means = sliding_mean(t, dqq, W)[t >= t[0] + W - 1e-9]
     assert row["dqq_2m_max"] == pytest.approx(np.nanmax(means), rel=1e-12)
     assert row["dqq_2m_max_1L"] == pytest.approx(np.nanmax(means[:, 0]), rel=1e-12)
-    assert row["dqq_2m_max"] <= row["dqq_max"]
+    assert row["dqq_2m_max"] <= row["dqq_raw_max"]
     # the 2 m sliding mean of ΣY per wheelset never exceeds the largest sampled |ΣY|
     assert row["sum_y_max_N"] <= np.nanmax(np.abs(case["wheelset_lateral_force_N"].values)) + 1e-9
     # the CSV layout of a contact run: per-wheel Y, per-wheelset ΣY, displacement, angle of attack
@@ -145,11 +145,12 @@ def test_kinematic_run_has_no_wheel_rail_columns(tmp_path):
     cols = case_columns(ds, ds["case"].values[0])
     assert not [c for c in cols if c.startswith(("Y_", "sumY", "y_ws", "aoa", "flange", "YQ"))]
     row = summary_row(ds.isel(case=0), s.curve)
-    assert "yq_max" not in row and "sum_y_max_N" not in row and "dqq_max" in row
+    assert "yq_max" not in row and "sum_y_max_N" not in row and "dqq_raw_max" in row
 
 
 # ------------------------------------------------------------------------------ checks
-@pytest.mark.parametrize("check", ["yq_max <= 1.2", "sum_y_max <= 30000", "yq_max[1R] <= 1.2"])
+@pytest.mark.parametrize("check", ["yq_max <= 1.2", "sum_y_max <= 30000", "yq_max[1R] <= 1.2",
+                                   "yq_2m_p9985[zone=R<250] <= 1.2", "Y_2m_p50 <= 1e5"])
 def test_kinematic_scenario_refuses_lateral_force_checks(tmp_path, check):
     data = yaml.safe_load((SCENARIOS / "curve_entry.yaml").read_text())
     data["checks"] = ["roll_max_rad <= 0.1", check]
@@ -158,15 +159,15 @@ def test_kinematic_scenario_refuses_lateral_force_checks(tmp_path, check):
         load_scenario(path)
     assert info.value.path == "checks[1]" and "needs curve.guidance: contact" in info.value.reason
     assert cli.main(["validate", str(path)]) == 2
-    # dqq_max and dqq_2m_max need no lateral force: accepted with kinematic guidance; yq_max
+    # dqq_raw_max and dqq_2m_max need no lateral force: accepted with kinematic guidance; yq_max
     # with contact
-    data["checks"] = ["dqq_max <= 0.6", "dqq_max[1L] <= 0.6", "dqq_2m_max[1R] <= 0.6"]
+    data["checks"] = ["dqq_raw_max <= 0.6", "dqq_raw_max[1L] <= 0.6", "dqq_2m_max[1R] <= 0.6"]
     checks = load_scenario(write_scenario(tmp_path, data)).checks
-    assert [(c.metric, c.wheel) for c in checks] == [("dqq_max", None), ("dqq_max", "1L"),
+    assert [(c.metric, c.wheel) for c in checks] == [("dqq_raw_max", None), ("dqq_raw_max", "1L"),
                                                      ("dqq_2m_max", "1R")]
     data["curve"]["guidance"] = "contact"
     data["checks"] = [check]
-    assert load_scenario(write_scenario(tmp_path, data)).checks[0].metric in ("yq_max", "sum_y_max")
+    assert load_scenario(write_scenario(tmp_path, data)).checks[0].metric == check.split("[")[0].split(" ")[0]
 
 
 # ------------------------------------------------------------------------------ irregularity
@@ -271,7 +272,8 @@ def test_shipped_contact_scenarios_load():
                  "straight_irregular.yaml", "curve_canted.yaml"):
         s = load_scenario(SCENARIOS / name)
         # EN 14363's processed quantities, not a raw sampled peak
-        assert s.curve.contact and {c.metric for c in s.checks} == {"yq_max", "sum_y_max", "dqq_2m_max"}
+        assert s.curve.contact and {c.metric for c in s.checks} - {"Y_2m_p50"} == {"yq_2m_p9985", "sum_y_2m_p9985",
+                                                                                   "dqq_2m_p9985"}
     s = load_scenario(SCENARIOS / "straight_irregular.yaml")
     t = s.curve.track_irregularity(s.vehicle)
     assert t.vertical_m.any() == False and np.abs(t.lateral_m).max() > 1e-3  # noqa: E712 (lateral only)

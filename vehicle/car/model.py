@@ -145,12 +145,10 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
         self.Q_static_N = self._P_axlebox_N + p.wheelset_mass_kg * g / 2.0
         self._delta_static_m = (self.Q_static_N / p.hertz_constant_N_per_m1_5) ** (2.0 / 3.0)
         # --- geometry at static equilibrium ---
-        a = p.wheelbase_m / 2.0
-        xb = p.bogie_centre_distance_m / 2.0
         #: bogie centre x [m], front then rear
-        self.bogie_x_m = np.array([xb, -xb])
+        self.bogie_x_m = np.array(p.bogie_x_m)
         #: wheelset centre x [m], wheelsets 1..4 from the front
-        self.wheelset_x_m = np.array([xb + a, xb - a, -xb + a, -xb - a])
+        self.wheelset_x_m = np.array(p.wheelset_x_m)
         self._z_wheelset_m = p.wheel_radius_m - self._delta_static_m
         self._bellow_height_m = p.airspring_upper_height_m - p.airspring_lower_height_m
         if self._bellow_height_m <= 0.0:

@@ -1,0 +1,209 @@
+"""EN 14363 on-track assessment statistics: 2 m sliding means sampled along the track, the track
+cut into test zones, per zone the percentiles and quasi-static values of each quantity, each
+beside its limit.
+
+What the standard says and what is assumed here (EN 14363:2016, *Railway applications - Testing
+and simulation for the acceptance of running characteristics of railway vehicles*; its text was
+not available while this was written, so the values below are the widely quoted ones and each is
+marked as such; a user bound by the standard checks them against their copy):
+
+* **Sliding mean.** Y, Q, ΣY, Y/Q (and here ΔQ/Q0) are assessed on their mean over a 2 m window
+  of track, the window moved in steps of 0.5 m (:data:`WINDOW_M`, :data:`STEP_M`;
+  :func:`track_means`). Each mean is the exact average of the sampled signal joined linearly.
+* **Test zones.** Straight track, large-radius curves R >= 600 m, small-radius curves 400 <= R <
+  600 m, very small radius curves 250 <= R < 400 m (the standard's zones 1 to 4). Metros run on
+  tighter curves than the standard covers: R < 250 m is its own zone here, assessed like the
+  very small radius zone. Transitions are their own zone (the standard assesses the arcs and
+  straights; the transitions are shown, not judged by the quasi-static limits). A 2 m mean
+  belongs to the zone of its window's centre (:func:`zone_of`).
+* **Statistics per zone and per wheel (wheelset for ΣY).** The 99.85 % and 0.15 % percentiles of
+  the 2 m means (numpy's linear interpolation between order statistics), the 50 % percentile as
+  the quasi-static value (the standard's statistical method for a section; here one section per
+  zone), the largest and smallest mean (:func:`zone_statistics`).
+* **Limits** (:func:`limits`): (Y/Q)_2m,99.85 <= Nadal's limit (1.2 for 70°, μ = 0.36);
+  |ΣY|_2m,99.85 <= Prud'homme's α (10 kN + 2 Q0/3); Q_2m,99.85 <= min(90 kN + Q0, 160 kN)
+  [assumed: the track-loading limit for speeds up to 160 km/h]; Y_qst <= 30 kN + 10.5 MN m / R_m
+  and Q_qst <= 145 kN in the curve zones R < 600 m [assumed: the quasi-static guiding and
+  vertical force limits]; (ΔQ/Q0)_2m,99.85 <= 0.6, the twist-test unloading limit used as a
+  running indicator (EN 14363 has no such limit on track; marked ``indicator``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+#: EN 14363's sliding window [m] and the step it is moved by along the track [m]
+WINDOW_M = 2.0
+STEP_M = 0.5
+#: the statistics of a zone, column suffix -> percentile [%] (None: the extreme)
+STATISTICS = {"p9985": 99.85, "p0015": 0.15, "p50": 50.0, "max": None, "min": None}
+#: test zones, in track order of a curve entry's curvature classes
+ZONES = ("straight", "transition", "R>=600", "400<=R<600", "250<=R<400", "R<250")
+#: EN 14363 limits assumed where the text was not available (see the module docstring)
+Q_LIMIT_ADD_N, Q_LIMIT_CAP_N = 90e3, 160e3
+Y_QST_BASE_N, Y_QST_PER_INV_RADIUS_N_M = 30e3, 10.5e6
+Q_QST_LIMIT_N = 145e3
+DQQ_INDICATOR = 0.6
+
+
+def cumulative_at(x: np.ndarray, values: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """∫_{x_0}^{p} v dx for every p in ``points`` (within [x_0, x_-1]) of the samples ``values``
+    (samples first, any trailing shape) joined linearly: exact for that piecewise-linear signal.
+    NaN samples make every integral that reaches them NaN."""
+    x = np.asarray(x, dtype=float)
+    v = np.asarray(values, dtype=float)
+    p = np.asarray(points, dtype=float)
+    shape = (-1,) + (1,) * (v.ndim - 1)
+    h = np.diff(x).reshape(shape)
+    cum = np.concatenate([np.zeros((1,) + v.shape[1:]), np.cumsum(0.5 * (v[1:] + v[:-1]) * h, axis=0)])
+    j = np.clip(np.searchsorted(x, p, side="right"), 1, x.size - 1)
+    d = (p - x[j - 1]).reshape(shape)
+    hj = (x[j] - x[j - 1]).reshape(shape)
+    return cum[j - 1] + v[j - 1] * d + (v[j] - v[j - 1]) * d * d / (2.0 * hj)
+
+
+def window_means(x: np.ndarray, values: np.ndarray, ends: np.ndarray, width: float) -> np.ndarray:
+    """Mean of ``values`` (samples at ``x``, samples first) over [e - width, e] for each e of
+    ``ends`` (each window inside [x_0, x_-1]), exact for the samples joined linearly."""
+    ends = np.asarray(ends, dtype=float)
+    return (cumulative_at(x, values, ends) - cumulative_at(x, values, ends - width)) / width
+
+
+@dataclass(frozen=True)
+class TrackMeans:
+    """2 m sliding means sampled along the track: ``s_m`` (n,) the arc length of each window's
+    centre [m] for the quantity's own position (a wheel's, a wheelset's), ``values`` (n, ...) the
+    means."""
+
+    s_m: np.ndarray
+    values: np.ndarray
+
+
+def track_means(s_m: np.ndarray, values: np.ndarray, window_m: float = WINDOW_M,
+                step_m: float = STEP_M) -> TrackMeans:
+    """EN 14363's sliding mean: the mean of ``values`` (samples first; sampled at the increasing
+    arc lengths ``s_m`` [m] of the point they belong to) over windows of ``window_m`` of track,
+    one every ``step_m`` from the first whole window to the last. The windows' ends lie on the
+    multiples of ``step_m``, so that two runs on the same track are assessed at the same places
+    whatever their output interval."""
+    s = np.asarray(s_m, dtype=float)
+    first = math.ceil((s[0] + window_m) / step_m - 1e-9) * step_m
+    ends = np.arange(first, s[-1] + 1e-9 * max(1.0, abs(s[-1])), step_m)
+    if ends.size == 0:
+        return TrackMeans(np.empty(0), np.empty((0,) + np.shape(values)[1:]))
+    return TrackMeans(ends - 0.5 * window_m, window_means(s, values, ends, window_m))
+
+
+def zone_name(kind: str, radius_m: Optional[float] = None) -> str:
+    """The test zone of a track segment: ``straight``, ``transition`` or an arc's radius class."""
+    if kind != "arc":
+        return kind
+    if radius_m >= 600.0:
+        return "R>=600"
+    if radius_m >= 400.0:
+        return "400<=R<600"
+    return "250<=R<400" if radius_m >= 250.0 else "R<250"
+
+
+def zone_of(segment_start_m: np.ndarray, segment_zones: Sequence[str], s_m: np.ndarray) -> np.ndarray:
+    """The zone of each arc length ``s_m`` (beyond the ends: the first / last segment's)."""
+    idx = np.clip(np.searchsorted(np.asarray(segment_start_m), np.asarray(s_m), side="right") - 1,
+                  0, len(segment_zones) - 1)
+    return np.asarray(segment_zones, dtype=object)[idx]
+
+
+def zone_statistics(means: np.ndarray, zones: np.ndarray) -> Dict[str, Dict[str, np.ndarray]]:
+    """Per zone present in ``zones`` (n,) the :data:`STATISTICS` of ``means`` (n, m) over its
+    points, per column, and ``n`` the number of means: zone -> statistic -> (m,). NaN means (a
+    stopped case) give NaN statistics."""
+    out: Dict[str, Dict[str, np.ndarray]] = {}
+    for zone in ZONES:
+        inside = means[zones == zone]
+        if inside.shape[0] == 0:
+            continue
+        count = {"n": np.full(inside.shape[1:], inside.shape[0])}
+        if np.isnan(inside).any():
+            out[zone] = {**{name: np.full(inside.shape[1:], np.nan) for name in STATISTICS}, **count}
+            continue
+        out[zone] = {**{name: (np.percentile(inside, q, axis=0) if q is not None
+                               else (inside.max(axis=0) if name == "max" else inside.min(axis=0)))
+                        for name, q in STATISTICS.items()}, **count}
+    return out
+
+
+@dataclass(frozen=True)
+class Limit:
+    """One assessed value beside its limit: ``quantity`` (e.g. ``yq_2m_p9985``), ``zone``,
+    ``where`` (the wheel or wheelset that gave the value), ``value``, ``limit`` and whether it is
+    an EN 14363 criterion or an ``indicator``."""
+
+    quantity: str
+    zone: str
+    where: str
+    value: float
+    limit: float
+    unit: str
+    criterion: str
+    source: str
+
+    @property
+    def passed(self) -> bool:
+        return not math.isnan(self.value) and self.value <= self.limit
+
+
+def q_limit_N(Q0_N: float) -> float:
+    """Q_2m,99.85 limit: 90 kN + Q0, at most 160 kN (assumed, see the module docstring)."""
+    return min(Q_LIMIT_ADD_N + Q0_N, Q_LIMIT_CAP_N)
+
+
+def y_qst_limit_N(radius_m: float) -> float:
+    """Quasi-static guiding force limit 30 kN + 10.5 MN m / R_m (assumed)."""
+    return Y_QST_BASE_N + Y_QST_PER_INV_RADIUS_N_M / radius_m
+
+
+def worst(per_who: np.ndarray, labels: Sequence[str]) -> tuple:
+    """(largest value, its label); NaN and the first NaN's label if there is one."""
+    per_who = np.asarray(per_who, dtype=float)
+    nan = np.flatnonzero(np.isnan(per_who))
+    i = int(nan[0]) if nan.size else int(np.argmax(per_who))
+    return float(per_who[i]), labels[i]
+
+
+def limits(stats: Dict[str, Dict[str, Dict[str, object]]], zone_radius_m: Dict[str, float], yq_lim: float,
+           sum_y_lim_N: float, Q0_N: float) -> List[Limit]:
+    """The assessed values beside their limits, one per quantity and zone (the worst wheel or
+    wheelset). ``stats``: quantity -> zone -> {``who``: the wheels (wheelsets), statistic ->
+    (len(who),) of :func:`zone_statistics`} for ``yq``, ``sum_y`` [N], ``Q`` [N], ``Y`` [N] and
+    ``dqq`` (those present); ``zone_radius_m``: an arc zone's radius (the smallest of its arcs)."""
+    out: List[Limit] = []
+
+    def add(zone, quantity, stat, per_who, limit, unit, criterion, source):
+        value, where = worst(per_who, stats[quantity][zone]["who"])
+        out.append(Limit(f"{quantity}_2m_{stat}", zone, where, value, limit, unit, criterion, source))
+
+    for zone in ZONES:
+
+        if zone in stats.get("yq", {}):
+            add(zone, "yq", "p9985", stats["yq"][zone]["p9985"], yq_lim, "1", "criterion", "Nadal")
+        if zone in stats.get("sum_y", {}):
+            s = stats["sum_y"][zone]
+            add(zone, "sum_y", "p9985", np.maximum(s["p9985"], -s["p0015"]), sum_y_lim_N, "N", "criterion",
+                "Prud'homme, |ΣY|")
+        if zone in stats.get("Q", {}):
+            add(zone, "Q", "p9985", stats["Q"][zone]["p9985"], q_limit_N(Q0_N), "N", "criterion",
+                "90 kN + Q0, at most 160 kN (assumed)")
+        radius = zone_radius_m.get(zone)
+        if radius is not None and radius < 600.0:
+            if zone in stats.get("Y", {}):
+                add(zone, "Y", "p50", stats["Y"][zone]["p50"], y_qst_limit_N(radius), "N", "criterion",
+                    f"Y_qst: 30 kN + 10.5 MN m / R (R = {radius:g} m; assumed)")
+            if zone in stats.get("Q", {}):
+                add(zone, "Q", "p50", stats["Q"][zone]["p50"], Q_QST_LIMIT_N, "N", "criterion",
+                    "Q_qst <= 145 kN (assumed)")
+        if zone in stats.get("dqq", {}):
+            add(zone, "dqq", "p9985", stats["dqq"][zone]["p9985"], DQQ_INDICATOR, "1", "indicator",
+                "twist-test unloading limit 0.6, as an indicator")
+    return out
