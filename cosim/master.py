@@ -93,15 +93,29 @@ class Sample:
     circuit: object         # pneumatics.circuit.CircuitOutputs at (x, z)
     valve_air: object       # cumulative air through each valve's supply and exhaust side
     valve_open: object      # cumulative open time of each valve's supply and exhaust side
+    floor: Optional[np.ndarray] = None   # the cars' floor accelerations (3, 3, cases), read once
 
 
-def _per_car(method: str, n: Optional[int] = None) -> Callable[[Sample], np.ndarray]:
-    """A car output (``MetroCar.<method>()``: (n,) or a scalar for n None) stacked over the
+def _per_car(method: str, n=None) -> Callable[[Sample], np.ndarray]:
+    """A car output (``MetroCar.<method>()``: shape ``n``, a scalar for n None) stacked over the
     cases, zeros for a stopped case (it becomes NaN in the record)."""
     def read(sample: Sample) -> np.ndarray:
         values = [np.asarray(getattr(car, method)(), dtype=float) if active else np.zeros(n or ())
                   for car, active in zip(sample.sim.cars, sample.sim.active)]
         return np.stack(values, axis=-1)
+    return read
+
+
+_FLOOR = _per_car("floor_accelerations_m_per_s2", (3, 3))
+
+
+def _floor_axis(axis: int) -> Callable[[Sample], np.ndarray]:
+    """One axis (0 x, 1 y, 2 z) of the cars' floor accelerations (3 floor points, cases), read
+    once per sampling instant for the three axes."""
+    def read(sample: Sample) -> np.ndarray:
+        if sample.floor is None:
+            sample.floor = _FLOOR(sample)
+        return sample.floor[axis]
     return read
 
 
@@ -126,6 +140,10 @@ OUTPUTS = (
            lambda s: s.circuit.T_K[s.sim.bellow_chambers]),
     Output("roll_rad", (), "rad", "carbody roll (absolute, positive left side up)", "roll_carbody_rad",
            _per_car("carbody_roll_rad")),
+    *(Output(f"floor_a{axis}_m_per_s2", ("floor_point",), "m/s2",
+             f"floor acceleration along the carbody's {axis} axis ({meaning}; specific force a - g, as an "
+             f"accelerometer on the floor measures it)", f"a{axis}_{{}}_m_per_s2", _floor_axis(i))
+      for i, (axis, meaning) in enumerate((("x", "forward"), ("y", "left"), ("z", "up")))),
     Output("air_from_supply_kg", (), "kg", "air injected from the supply (cumulative)", "air_from_supply_kg",
            _air_from("supply")),
     Output("air_to_atmosphere_kg", (), "kg", "air exhausted to the atmosphere (cumulative)", "air_to_atmosphere_kg",

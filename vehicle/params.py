@@ -41,6 +41,9 @@ from dataclasses import dataclass
 BELLOWS = ("FL", "FR", "RL", "RR")
 #: Wheels: wheelset 1..4 from the front, left/right in the running direction.
 WHEELS = ("1L", "1R", "2L", "2R", "3L", "3R", "4L", "4R")
+#: Floor points where the carbody's accelerations are measured: above the front bogie centre, at
+#: the car centre, above the rear bogie centre (at ``floor_height_m``; EN 12299's positions).
+FLOOR_POINTS = ("front", "centre", "rear")
 
 
 @dataclass(frozen=True)
@@ -69,6 +72,11 @@ class VehicleParams:
     # Bellow upper plate (on the carbody) above rail top at static equilibrium: 0.25 m nominal
     # bellow height, typical of metro airsprings (0.2-0.3 m), under a ~1.1 m floor.
     airspring_upper_height_m: float = 1.05
+
+    # Floor above rail top, where the floor accelerations are measured (EN 12299 places its
+    # measuring points on the floor above the bogie centres and at the car centre): ~1.1 m on
+    # metro cars, just above the bellows' upper plates.
+    floor_height_m: float = 1.1
 
     # --- centres of gravity above rail top at static equilibrium ---
     # Low-floor-ish metro carbody (floor ~1.1 m, roof ~3.6 m): CoG ~1.5 m (Manchester: 2.0 m).
@@ -215,6 +223,12 @@ class VehicleParams:
         """x [m] of the bogie centres from the car centre, front then rear."""
         xb = self.bogie_centre_distance_m / 2.0
         return (xb, -xb)
+
+    @property
+    def floor_points_m(self) -> tuple:
+        """(x, y, z) [m] of the :data:`FLOOR_POINTS` relative to the carbody's centre of gravity."""
+        dz = self.floor_height_m - self.carbody_cog_height_m
+        return tuple((x, 0.0, dz) for x in (self.bogie_x_m[0], 0.0, self.bogie_x_m[1]))
 
     @property
     def wheelset_x_m(self) -> tuple:

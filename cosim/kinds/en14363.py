@@ -5,12 +5,23 @@ Shared by the car kinds that run on a track (``curve_entry``)."""
 from __future__ import annotations
 
 import math
-from typing import Dict, List, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import xarray as xr
 
-from cosim.limits.assessment import STATISTICS, ZONES, Limit, limits, track_means, zone_name, zone_of, zone_statistics
+from cosim.limits.assessment import (
+    STATISTICS,
+    ZONES,
+    Limit,
+    acceleration_statistics,
+    band_filtered,
+    limits,
+    track_means,
+    zone_name,
+    zone_of,
+    zone_statistics,
+)
 from cosim.results.series import WHEELSETS
 from vehicle.params import WHEELS, VehicleParams
 from vehicle.track import Arc, Straight, TrackGeometry
@@ -24,6 +35,11 @@ QUANTITIES = {
     "sum_y": ("wheelset_lateral_force_N", "wheelset", "N", "ΣY per wheelset (+ left)"),
     "dqq": ("dqq", "wheel", "1", "wheel unloading ΔQ/Q0"),
 }
+#: the carbody accelerations (not 2 m means): quantity -> (per, unit, long name)
+ACCELERATIONS = {
+    "ay_floor": ("floor_point", "m/s2", "lateral floor acceleration above the bogie, 0.4-10 Hz"),
+    "az_floor": ("floor_point", "m/s2", "vertical floor acceleration above the bogie, 0.4-10 Hz"),
+}
 #: checkable metrics of the assessment: metric -> (quantity, statistic, summary column); the
 #: check's value is the worst over the zones and wheels (wheelsets) its selectors leave; for
 #: ``sum_y`` the larger of the 99.85 % and minus the 0.15 % percentile (|ΣY|)
@@ -34,6 +50,10 @@ METRICS = {
     "Y_2m_p50": ("Y", "p50", "Y_2m_p50_N"),
     "Q_2m_p50": ("Q", "p50", "Q_2m_p50_N"),
     "dqq_2m_p9985": ("dqq", "p9985", "dqq_2m_p9985"),
+    "ay_floor_max": ("ay_floor", "max", "ay_floor_max_m_per_s2"),
+    "ay_floor_rms": ("ay_floor", "rms", "ay_floor_rms_m_per_s2"),
+    "az_floor_max": ("az_floor", "max", "az_floor_max_m_per_s2"),
+    "az_floor_rms": ("az_floor", "rms", "az_floor_rms_m_per_s2"),
 }
 #: the metrics judged only in the curve zones R < 600 m (quasi-static values), and those zones
 QUASI_STATIC = ("Y_2m_p50", "Q_2m_p50")
@@ -83,11 +103,40 @@ def assess_case(case: xr.Dataset, s_centre_m: np.ndarray, track: TrackGeometry, 
             means = track_means(s_centre_m + x_ws[ws], values[:, i])
             per_label[label] = zone_statistics(means.values[:, None], zone_of(starts, zones, means.s_m))
         stats[quantity] = _by_zone(per_label)
+    stats.update(_accelerations(case, s_centre_m, vehicle, starts, zones))
     Q0 = float(case["Q0_N"].min())
     return stats, limits(stats, radius, yq_lim, sum_y_lim_N, Q0)
 
 
-def _by_zone(per_label: Dict[str, Dict[str, Dict[str, np.ndarray]]]) -> Dict[str, Dict[str, object]]:
+def _accelerations(case: xr.Dataset, s_centre_m: np.ndarray, vehicle: VehicleParams, starts, zones) -> Dict[str, dict]:
+    """The carbody's lateral and vertical floor accelerations above the bogie centres, band
+    filtered, per zone of each point's own position (none when the output is too coarse for the
+    band: the run warns)."""
+    out = {}
+    t = case["time"].values
+    for quantity, axis in (("ay_floor", "y"), ("az_floor", "z")):
+        name = f"floor_a{axis}_m_per_s2"
+        if name not in case:
+            continue
+        per_label = {}
+        for point, x in (("front", vehicle.bogie_x_m[0]), ("rear", vehicle.bogie_x_m[1])):
+            filtered = band_filtered(t, case[name].sel(floor_point=point).values)
+            per_label[point] = acceleration_statistics(filtered[:, None], zone_of(starts, zones, s_centre_m + x))
+        out[quantity] = _by_zone(per_label, ("max", "rms", "n"))
+    return out
+
+
+def acceleration_warning(t_s: np.ndarray) -> Optional[str]:
+    """Why a run's carbody accelerations cannot be assessed (its output too coarse), or None."""
+    try:
+        band_filtered(t_s, np.zeros(len(t_s)))
+    except ValueError as exc:
+        return f"carbody accelerations not assessed: {exc}"
+    return None
+
+
+def _by_zone(per_label: Dict[str, Dict[str, Dict[str, np.ndarray]]],
+             statistics: Sequence[str] = (*STATISTICS, "n")) -> Dict[str, Dict[str, object]]:
     """label -> zone -> statistic -> (1,) into zone -> {``who``: the labels that were in the zone,
     statistic -> (len(who),)}: near the ends of a run a zone may hold some wheels' windows only."""
     out: Dict[str, Dict[str, object]] = {}
@@ -95,7 +144,7 @@ def _by_zone(per_label: Dict[str, Dict[str, Dict[str, np.ndarray]]]) -> Dict[str
         who = [label for label, zs in per_label.items() if zone in zs]
         if who:
             out[zone] = {"who": who, **{stat: np.array([per_label[w][zone][stat][0] for w in who])
-                                         for stat in (*STATISTICS, "n")}}
+                                         for stat in statistics}}
     return out
 
 
@@ -103,12 +152,18 @@ def statistics_rows(stats, valves: bool, k: float) -> List[Dict[str, object]]:
     """``assessment.csv``: one row per quantity, zone and wheel (wheelset), the statistics as columns."""
     rows = []
     for quantity, per_zone in stats.items():
-        _, per, unit, _ = QUANTITIES[quantity]
+        if quantity in ACCELERATIONS:
+            per, unit, _ = ACCELERATIONS[quantity]
+            name, counted = f"{quantity}_0.4-10Hz", "n_samples"
+        else:
+            _, per, unit, _ = QUANTITIES[quantity]
+            name, counted = f"{quantity}_2m", "n_means"
         for zone, values in per_zone.items():
             for i, label in enumerate(values["who"]):
-                rows.append({"valves": valves, "k_W_per_K": k, "quantity": f"{quantity}_2m", "unit": unit,
-                             "zone": zone, "per": per, "at": label, "n_means": int(values["n"][i]),
-                             **{stat: float(values[stat][i]) for stat in STATISTICS}})
+                rows.append({"valves": valves, "k_W_per_K": k, "quantity": name, "unit": unit, "zone": zone,
+                             "per": per, "at": label, "n": int(values["n"][i]), "counts": counted,
+                             **{stat: float(values[stat][i]) if stat in values else float("nan")
+                                for stat in (*STATISTICS, "rms")}})
     return rows
 
 

@@ -26,6 +26,12 @@ marked as such; a user bound by the standard checks them against their copy):
   and Q_qst <= 145 kN in the curve zones R < 600 m [assumed: the quasi-static guiding and
   vertical force limits]; (ΔQ/Q0)_2m,99.85 <= 0.6, the twist-test unloading limit used as a
   running indicator (EN 14363 has no such limit on track; marked ``indicator``).
+* **Carbody accelerations** (:func:`band_filtered`, :func:`acceleration_statistics`): the lateral
+  and vertical floor accelerations above the bogie centres, band-pass filtered 0.4-10 Hz (a
+  4th-order Butterworth run forwards and backwards: no phase shift), per zone their largest
+  magnitude and rms; limits [assumed] ÿ*_max 3 m/s², z̈*_max 5 m/s², ÿ*_rms 0.5 m/s², z̈*_rms
+  1 m/s². The samples are the run's output samples, not anti-alias filtered: content above half
+  the output rate folds into the band, so keep ``solver.output_interval_s`` small (<= 0.02 s).
 """
 from __future__ import annotations
 
@@ -47,6 +53,9 @@ Q_LIMIT_ADD_N, Q_LIMIT_CAP_N = 90e3, 160e3
 Y_QST_BASE_N, Y_QST_PER_INV_RADIUS_N_M = 30e3, 10.5e6
 Q_QST_LIMIT_N = 145e3
 DQQ_INDICATOR = 0.6
+#: carbody accelerations: the filter band [Hz] and the limits [m/s^2] (assumed)
+ACCELERATION_BAND_HZ = (0.4, 10.0)
+ACCELERATION_LIMITS = {"ay_floor": {"max": 3.0, "rms": 0.5}, "az_floor": {"max": 5.0, "rms": 1.0}}
 
 
 def cumulative_at(x: np.ndarray, values: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -134,6 +143,36 @@ def zone_statistics(means: np.ndarray, zones: np.ndarray) -> Dict[str, Dict[str,
     return out
 
 
+def band_filtered(t_s: np.ndarray, values: np.ndarray, band_hz=ACCELERATION_BAND_HZ, order: int = 4) -> np.ndarray:
+    """``values`` (samples first, uniformly sampled at ``t_s``) band-pass filtered forwards and
+    backwards (zero phase) by a Butterworth filter of ``order`` on ``band_hz``. Raises
+    ValueError when the sampling is too coarse for the band (the upper edge at or above 0.8 of
+    the Nyquist frequency)."""
+    from scipy.signal import butter, sosfiltfilt
+    t = np.asarray(t_s, dtype=float)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    if band_hz[1] >= 0.4 * fs:
+        raise ValueError(f"sampled at {fs:g} Hz: too coarse for a band up to {band_hz[1]:g} Hz "
+                         f"(output interval at most {0.4 / band_hz[1]:g} s)")
+    sos = butter(order, band_hz, btype="bandpass", fs=fs, output="sos")
+    v = np.asarray(values, dtype=float)
+    if v.shape[0] <= 3 * (2 * order + 1):
+        return np.full(v.shape, np.nan)
+    return sosfiltfilt(sos, v, axis=0)
+
+
+def acceleration_statistics(filtered: np.ndarray, zones: np.ndarray) -> Dict[str, Dict[str, np.ndarray]]:
+    """Per zone present in ``zones`` (n,) the largest magnitude (``max``), the rms (``rms``) of the
+    filtered accelerations ``filtered`` (n, m) over its samples, and ``n`` their number."""
+    out: Dict[str, Dict[str, np.ndarray]] = {}
+    for zone in ZONES:
+        inside = filtered[zones == zone]
+        if inside.shape[0]:
+            out[zone] = {"max": np.abs(inside).max(axis=0), "rms": np.sqrt((inside ** 2).mean(axis=0)),
+                         "n": np.full(inside.shape[1:], inside.shape[0])}
+    return out
+
+
 @dataclass(frozen=True)
 class Limit:
     """One assessed value beside its limit: ``quantity`` (e.g. ``yq_2m_p9985``), ``zone``,
@@ -177,12 +216,13 @@ def limits(stats: Dict[str, Dict[str, Dict[str, object]]], zone_radius_m: Dict[s
     """The assessed values beside their limits, one per quantity and zone (the worst wheel or
     wheelset). ``stats``: quantity -> zone -> {``who``: the wheels (wheelsets), statistic ->
     (len(who),) of :func:`zone_statistics`} for ``yq``, ``sum_y`` [N], ``Q`` [N], ``Y`` [N] and
-    ``dqq`` (those present); ``zone_radius_m``: an arc zone's radius (the smallest of its arcs)."""
+    ``dqq``, and ``max`` / ``rms`` for ``ay_floor``, ``az_floor`` [m/s^2] (those present);
+    ``zone_radius_m``: an arc zone's radius (the smallest of its arcs)."""
     out: List[Limit] = []
 
-    def add(zone, quantity, stat, per_who, limit, unit, criterion, source):
+    def add(zone, quantity, stat, per_who, limit, unit, criterion, source, name=None):
         value, where = worst(per_who, stats[quantity][zone]["who"])
-        out.append(Limit(f"{quantity}_2m_{stat}", zone, where, value, limit, unit, criterion, source))
+        out.append(Limit(name or f"{quantity}_2m_{stat}", zone, where, value, limit, unit, criterion, source))
 
     for zone in ZONES:
 
@@ -206,4 +246,10 @@ def limits(stats: Dict[str, Dict[str, Dict[str, object]]], zone_radius_m: Dict[s
         if zone in stats.get("dqq", {}):
             add(zone, "dqq", "p9985", stats["dqq"][zone]["p9985"], DQQ_INDICATOR, "1", "indicator",
                 "twist-test unloading limit 0.6, as an indicator")
+        for quantity, limit in ACCELERATION_LIMITS.items():
+            if zone in stats.get(quantity, {}):
+                for stat in ("max", "rms"):
+                    add(zone, quantity, stat, stats[quantity][zone][stat], limit[stat], "m/s2", "criterion",
+                        f"carbody, {ACCELERATION_BAND_HZ[0]:g}-{ACCELERATION_BAND_HZ[1]:g} Hz (assumed)",
+                        name=f"{quantity}_{stat}")
     return out

@@ -14,7 +14,7 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 import xarray as xr
 
-from vehicle.params import BELLOWS, WHEELS
+from vehicle.params import BELLOWS, FLOOR_POINTS, WHEELS
 
 from cosim.master import OUTPUTS
 from cosim.scenario.schema import k_label
@@ -35,7 +35,7 @@ def car_dataset(arrays: Dict[str, np.ndarray], ks: Sequence[float], valves: bool
     Dataset. ``valves``: the valve setting of every case; ``named``: the case names carry it
     (a scenario with several settings)."""
     labels = {"wheel": list(WHEELS), "wheelset": list(WHEELSETS), "bellow": list(BELLOWS), "link": list(links),
-              "valve": list(valve_names)}
+              "valve": list(valve_names), "floor_point": list(FLOOR_POINTS)}
     data = {}
     for o in OUTPUTS:                       # every sampled output, declared in cosim.master.OUTPUTS
         if o.name not in arrays:

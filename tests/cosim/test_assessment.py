@@ -163,3 +163,52 @@ def test_the_processed_unloading_holds_where_the_raw_peak_moves_with_the_step(tm
         return (max(values) - min(values)) / max(values)
     assert spread("dqq_raw_max") > 0.1
     assert spread("dqq_2m_p9985") < 1e-4 and spread("Q_2m_p9985_N") < 1e-4
+
+
+# ------------------------------------------------------------------------------ carbody accelerations
+def test_the_band_filter_passes_the_band_and_stops_the_rest():
+    # 200 Hz samples, 60 s: a 2 Hz sine (mid-band) keeps its amplitude within 1 % (the forward and
+    # backward 4th-order Butterworth's gain there is 1 - 1e-5); a 0.05 Hz drift (3 octaves below the
+    # band) and a 40 Hz ringing (2 octaves above) are cut below 1 % of theirs (the squared gain of an
+    # 8th-order band-pass 2-3 octaves out: < 1e-4)
+    from cosim.limits.assessment import band_filtered
+    t = np.arange(0.0, 60.0, 0.005)
+    inner = slice(2000, -2000)                     # away from the record's ends
+    for f, gain in ((2.0, (0.99, 1.01)), (0.05, (0.0, 0.01)), (40.0, (0.0, 0.01))):
+        out = band_filtered(t, np.sin(2 * math.pi * f * t))[inner]
+        assert gain[0] <= np.abs(out).max() <= gain[1], f
+    with pytest.raises(ValueError, match="too coarse"):
+        band_filtered(np.arange(0.0, 10.0, 0.05), np.zeros(200))       # 20 Hz samples for a 10 Hz band
+
+
+def test_the_acceleration_statistics_of_a_sine():
+    from cosim.limits.assessment import acceleration_statistics
+    t = np.arange(0.0, 10.0, 0.001)
+    a = 0.7 * np.sin(2 * math.pi * 2.0 * t)                     # 20 whole periods
+    stats = acceleration_statistics(a[:, None], np.array(["straight"] * t.size, dtype=object))["straight"]
+    assert stats["rms"][0] == pytest.approx(0.7 / math.sqrt(2), rel=1e-6)
+    assert stats["max"][0] == pytest.approx(0.7, rel=1e-4)
+
+
+@pytest.mark.slow
+def test_the_floor_feels_the_uncompensated_acceleration_in_a_steady_arc(tmp_path):
+    """10 m/s in R = 100 m without cant: an accelerometer on the floor at the car centre, rolled
+    by phi (left side up), reads v^2/R cos(phi) + g sin(phi) across the car and g cos(phi) -
+    v^2/R sin(phi) upwards (the specific force in the body's axes). Means over the last 3 s
+    (three periods of the ~1 Hz sway that moves both sides alike): within 1 % and 0.1 %."""
+    import xarray as xr
+
+    from cosim.kinds.curve_entry import simulate
+    from cosim.load import load_scenario
+
+    from helpers import SCENARIOS
+    s = load_scenario(SCENARIOS / "curve_entry_contact.yaml", ["curve.duration_s=9", "curve.valve_settings=[false]",
+                                                               "solver.jobs=1"], [math.inf])
+    ds, _ = simulate(s)
+    case = ds.isel(case=0).where(ds["time"] >= 6.0, drop=True)
+    phi = case["roll_rad"]
+    g, a_c = s.vehicle.gravity_m_per_s2, s.curve.speed_m_per_s ** 2 / s.curve.radius_m
+    centre = case.sel(floor_point="centre")
+    lateral, vertical = xr.DataArray(a_c * np.cos(phi) + g * np.sin(phi)), xr.DataArray(g * np.cos(phi) - a_c * np.sin(phi))
+    assert float(centre["floor_ay_m_per_s2"].mean()) == pytest.approx(float(lateral.mean()), rel=0.01)
+    assert float(centre["floor_az_m_per_s2"].mean()) == pytest.approx(float(vertical.mean()), rel=1e-3)

@@ -166,6 +166,9 @@ class _StandingCar:
     def carbody_roll_rad(self):
         return 0.0
 
+    def floor_accelerations_m_per_s2(self):
+        return np.array([[0.0] * 3, [0.0] * 3, [9.81] * 3])      # at rest: 1 g upwards
+
 
 def test_a_diverging_case_stops_alone_and_keeps_its_record(tmp_path):
     from cosim.master import CoSimulation

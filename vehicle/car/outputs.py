@@ -183,6 +183,21 @@ class CarOutputs:
         yaw = (np.array(yaw) + math.pi) % (2.0 * math.pi) - math.pi
         return np.array(y), yaw
 
+    def floor_accelerations_m_per_s2(self) -> np.ndarray:
+        """(3, 3) acceleration [m/s^2] at the floor points (:data:`~vehicle.params.FLOOR_POINTS`,
+        columns) along the carbody's own axes x (forward), y (left), z (up) (rows), as an
+        accelerometer fixed to the floor measures it: the specific force a - g, so 1 g upwards at
+        rest, and in a curve the lateral acceleration the track's cant does not compensate. The
+        point's acceleration includes the body's rotation (angular acceleration and velocity)."""
+        body = self.mbs.GetObjectOutputBody
+        A = np.asarray(body(self._carbody, _OUT.RotationMatrix)).reshape(3, 3)
+        g = np.array([0.0, 0.0, -self.params.gravity_m_per_s2])
+        out = np.empty((3, 3))
+        for j, point in enumerate(self.params.floor_points_m):
+            a = np.asarray(body(self._carbody, _OUT.Acceleration, localPosition=list(point)))
+            out[:, j] = A.T @ (a - g)
+        return out
+
     def carbody_roll_rad(self) -> float:
         """Carbody roll angle [rad], right-hand about its own x axis (forward): positive = left
         side up, i.e. the outward roll of a left-hand curve (negative in a right-hand one).
