@@ -1,4 +1,4 @@
-"""Command line: ``pneumorail run | check | validate | verify | compare | report | sweep | presets``.
+"""Command line: ``pneumorail run | check | validate | verify | compare | report | comfort | sweep | presets``.
 
 Exit codes: 0 success (for ``check``: every limit holds; for ``verify``: every estimated
 discretisation error within the scenario's ``verify.tolerance``; for ``sweep``: every case
@@ -76,6 +76,7 @@ examples:
   pneumorail sweep scenarios/curve_entry.yaml --grid curve.speed_m_per_s=8,10,12 --k 0,inf
   pneumorail compare results/twist_dqq results/twist_dqq_1a2b3c4d --wheels 1L,3R
   pneumorail report results/curve_canted --out curve_canted.html    # one HTML file to hand on
+  pneumorail comfort results/straight_irregular/timeseries/curve_valves=off_k=inf.csv --point centre
 
 every scenario key: docs/scenario_keys.md; the models: docs/models.md
 """
@@ -134,6 +135,10 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--check", action="store_true",
                    help="evaluate the base scenario's checks: in every case; exit 1 naming the cases that fail")
     w.add_argument("--quiet", action="store_true", help="no progress lines")
+    m = sub.add_parser("comfort", help="ride comfort (EN 12299 N_MV, Cc, Sperling Wz, ISO 2631) of an acceleration CSV")
+    m.add_argument("record", type=Path, help="CSV with t_s and any of ax_m_per_s2, ay_m_per_s2, az_m_per_s2 (car axes)")
+    m.add_argument("--point", default=None, help="a car run's floor point (front, centre, rear): its a<x|y|z>_<point> columns")
+    m.add_argument("--out", type=Path, default=None, help="output folder (default: beside the file, comfort_<its name>)")
     o = sub.add_parser("report", help="one self-contained HTML report of one or more runs (side by side)")
     o.add_argument("dirs", type=Path, nargs="+", help="output folders of runs, checks or verify")
     o.add_argument("--out", type=Path, default=None, help="the HTML file (default: report.html in the first folder)")
@@ -161,6 +166,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             for path in compare_runs(args.dirs, out, overlays(), select):
                 print(path)
             return EXIT_OK
+        if args.command == "comfort":
+            return _comfort(args)
         if args.command == "report":
             from cosim.results.report import write_report
             t0 = time.perf_counter()
@@ -333,6 +340,19 @@ def _verify(args) -> int:
         print(f"DIVERGED: {diverged}")
         return EXIT_FAILED
     return EXIT_OK if all(e.error <= scenario.verify.tolerance for e in found) else EXIT_FAILED
+
+
+def _comfort(args) -> int:
+    from cosim.results.comfort_files import comfort_of_file
+    out = args.out or args.record.resolve().parent / f"comfort_{args.record.stem}"
+    result = comfort_of_file(args.record, out, args.point)
+    for message in result.warnings:
+        print(f"warning: {message}", file=sys.stderr)
+    n_mv = "—" if result.N_MV is None else f"{result.N_MV:.3f} ({result.scale})"
+    print(f"N_MV {n_mv}; " + ", ".join(f"a{a.upper()}P95 {v:.4g} m/s²" for a, v in result.aP95_m_per_s2.items())
+          + "; " + ", ".join(f"Wz_{a} {v:.3g}" for a, v in result.Wz.items()))
+    print(f"results in {out}/")
+    return EXIT_OK
 
 
 def _run(args) -> int:

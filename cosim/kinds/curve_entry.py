@@ -19,6 +19,7 @@ from cosim.errors import ScenarioError
 from cosim.kinds import en14363
 from cosim.kinds.base import Kind
 from cosim.kinds.car import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
+from cosim.kinds.comfort import comfort_columns
 from cosim.limits.assessment import STEP_M
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, window_mean
@@ -444,6 +445,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
             case, s_centre, curve.track(), scenario.vehicle, nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction),
             prudhomme_limit_N(float(case["Q0_N"].min()), curve.prudhomme_alpha))
         row.update(en14363.summary_columns(found))
+        row.update(comfort_columns(case))
         rows.append(row)
         cases.append(case_metrics(row, en14363.zone_metrics(found, stats)))
         statistics += en14363.statistics_rows(stats, row["valves"], row["k_W_per_K"])
