@@ -14,12 +14,14 @@ from vehicle.params import FLOOR_POINTS
 COLUMNS = ("N_MV_{}", "Wz_y_{}", "Wz_z_{}")
 
 
-def comfort_columns(case: xr.Dataset) -> Dict[str, float]:
-    """N_MV and Wz (lateral, vertical) at each floor point of one case (``case``: its Dataset);
-    empty when the run is shorter than one 5 s block or has no floor accelerations. Over the
-    whole run: EN 12299 asks for 5 minutes, a shorter run gives the index of what it has."""
+def comfort_columns(case: xr.Dataset, t_from_s: float = -float("inf")) -> Dict[str, float]:
+    """N_MV and Wz (lateral, vertical) at each floor point of one case (``case``: its Dataset)
+    over its samples from ``t_from_s`` on; empty when that is shorter than one 5 s block or the
+    run has no floor accelerations. EN 12299 asks for 5 minutes; a shorter record gives the index
+    of what it has."""
     if "floor_az_m_per_s2" not in case:
         return {}
+    case = case.sel(time=case["time"] >= t_from_s)
     t = case["time"].values
     if t.size < 2 or t[-1] - t[0] + (t[1] - t[0]) < BLOCK_S:
         return {}

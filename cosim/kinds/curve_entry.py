@@ -206,7 +206,7 @@ def parse(data, vehicle: VehicleParams, path: Path) -> CurveTest:
     except ValueError as exc:
         raise ScenarioError(path, ["curve"], f"the track cannot be built: {exc}") from None
     if irregularity is not None:
-        curve = dataclasses.replace(curve, irregularity=_parse_irregularity(irregularity, curve, vehicle, path))
+        curve = dataclasses.replace(curve, irregularity=parse_irregularity(irregularity, curve, vehicle, path))
     return curve
 
 
@@ -236,10 +236,10 @@ def _check_contact(curve: CurveTest, path) -> None:
                                                                 f"wagons 0.85), got {curve.prudhomme_alpha:g}")
 
 
-def _parse_irregularity(value, curve: CurveTest, vehicle: VehicleParams, path):
-    """``curve.irregularity``: null, {psd: KIND, seed, ...} or {file: PATH}; generated (or read)
-    once here, so that a bad one fails before any run."""
-    where = ["curve", "irregularity"]
+def parse_irregularity(value, curve: CurveTest, vehicle: VehicleParams, path, where=("curve", "irregularity")):
+    """``curve.irregularity`` (or the section ``where`` names): null, {psd: KIND, seed, ...} or
+    {file: PATH}; generated (or read) once here, so that a bad one fails before any run."""
+    where = list(where)
     if not isinstance(value, Mapping):
         raise ScenarioError(path, where, f"expected null, {{psd: erri_b176_low, seed: 1}} or {{file: irregularity.csv}}, "
                                          f"got {describe(value)}")

@@ -147,3 +147,44 @@ def test_a_car_run_reports_the_comfort_of_each_floor_point():
         assert columns[f"Wz_z_{point}"] == pytest.approx(direct.Wz["z"], rel=1e-12)
     assert columns["N_MV_rear"] == pytest.approx(4 * columns["N_MV_centre"], rel=1e-9)     # linear in the amplitude
     assert comfort_columns(case.isel(time=slice(0, 500))) == {}                            # 2.5 s: not one block
+
+
+# ------------------------------------------------------------------------------ the ride kind
+def _ride(tmp_path, **ride):
+    import yaml
+
+    from helpers import write_scenario
+    data = yaml.safe_load((__import__("helpers").SCENARIOS / "ride_comfort.yaml").read_text())
+    data["k_W_per_K"] = [float("inf")]
+    data["solver"]["jobs"] = 1
+    data["ride"].update({"speeds_m_per_s": [10.0, 20.0], "record_s": 6.0, "settle_s": 1.0, **ride})
+    return write_scenario(tmp_path, data)
+
+
+@pytest.mark.slow
+def test_a_ride_gives_the_comfort_of_each_speed_over_its_record(tmp_path):
+    import csv
+    out = tmp_path / "ride"
+    assert cli.main(["run", str(_ride(tmp_path)), "--out", str(out), "--quiet"]) == 0
+    rows = list(csv.DictReader((out / "summary.csv").open()))
+    assert [float(r["speed_m_per_s"]) for r in rows] == [10.0, 20.0]
+    assert (out / "comfort_vs_speed.png").exists() and (out / "psd_floor.png").exists()
+    # the summary's N_MV is the comfort command's on the same record (the floor point's columns
+    # from the record's start on, written to a CSV of its own)
+    series = np.genfromtxt(out / "timeseries" / "ride_v=20_valves=on_k=inf.csv", delimiter=",", names=True)
+    keep = series["t_s"] >= float(rows[1]["record_from_s"])
+    record = _write(tmp_path / "centre.csv", series["t_s"][keep],
+                    {f"a{a}_m_per_s2": series[f"a{a}_centre_m_per_s2"][keep] for a in "xyz"})
+    assert cli.main(["comfort", str(record), "--out", str(tmp_path / "c")]) == 0
+    info = json.loads((tmp_path / "c" / "comfort.json").read_text())
+    # the CSV keeps 9 significant digits: the same index to 1e-6
+    assert float(rows[1]["N_MV_centre"]) == pytest.approx(info["N_MV"], rel=1e-6)
+    assert cli.main(["compare", str(out)]) == 0
+
+
+@pytest.mark.parametrize("change, where", [({"speeds_m_per_s": [10.0, -5.0]}, "ride.speeds_m_per_s[1]"),
+                                            ({"record_s": 3.0}, "ride.record_s"),
+                                            ({"radius_m": 0.0}, "ride.radius_m")])
+def test_a_bad_ride_is_refused_before_it_runs(tmp_path, capsys, change, where):
+    assert cli.main(["validate", str(_ride(tmp_path, **change))]) == 2
+    assert where in capsys.readouterr().err

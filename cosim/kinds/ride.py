@@ -1,0 +1,243 @@
+"""Ride comfort on irregular track (EN 12299): the car with wheel-rail contact at a list of speeds,
+on straight track or in a curve, over seeded irregularities, across k and valve settings. Per case
+(speed x k x valve setting) the comfort indices at each floor point over the record
+(:mod:`cosim.kinds.comfort`), and figures of comfort against speed and of the floor accelerations'
+power spectra. Kind ``ride``, section ``ride`` (:class:`RideTest`).
+
+Each speed is a run along a track built for it (:func:`curve_at`): the car starts at rest on design
+track, the irregularity fades in ahead of it, the record starts ``settle_s`` later (in a curve:
+once the whole car is in the arc as well) and lasts ``record_s``."""
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Mapping, Optional, Tuple
+
+import numpy as np
+
+from cosim.errors import ScenarioError
+from cosim.kinds import curve_entry
+from cosim.kinds.base import Kind
+from cosim.kinds.comfort import COLUMNS, comfort_columns
+from cosim.kinds.curve_entry import MAX_SPEED_M_PER_S, CurveTest, IrregularitySpec, parse_irregularity
+from cosim.limits.checks import CaseMetrics
+from cosim.results.io import Progress, read_rows
+from cosim.results.outcome import Outcome, largest
+from cosim.results.overlay import Selection
+from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
+from cosim.scenario.model import Scenario
+from cosim.scenario.schema import Range, build, check_valve_settings, positive
+from vehicle.params import FLOOR_POINTS, VehicleParams
+
+#: the default irregularity: ERRI B176 low level, all four channels
+DEFAULT_IRREGULARITY = {"psd": "erri_b176_low", "seed": 0, "channels": ["lateral", "vertical", "cross_level", "gauge"]}
+#: room left on the track after the record [m]
+TRACK_MARGIN_M = 30.0
+
+
+@dataclass(frozen=True)
+class RideTest:
+    """A ride at each of ``speeds_m_per_s`` for ``settle_s`` + ``record_s`` (EN 12299 evaluates 5
+    minutes: the default), on straight track (``radius_m``: null) or in a curve of ``radius_m``
+    with ``cant_rad``, entered over a Bloss transition of ``transition_m`` after a 20 m straight.
+    ``irregularity``: as a curve's (:class:`~cosim.kinds.curve_entry.IrregularitySpec`; default ERRI
+    B176 low in all four channels, seed 0). ``valve_settings``: runs with the levelling and
+    differential valves disconnected (false) and connected (true)."""
+
+    speeds_m_per_s: Tuple[float, ...] = (10.0, 20.0)
+    record_s: float = 300.0
+    settle_s: float = 5.0
+    radius_m: Optional[float] = None
+    cant_rad: float = 0.0
+    transition_m: float = 30.0
+    valve_settings: Tuple[bool, ...] = (True,)
+    irregularity: Optional[IrregularitySpec] = None
+
+    FIELD_RANGES = {"record_s": positive("s", "the comfort record (EN 12299: 300 s); at least one 5 s block"),
+                    "settle_s": Range(0.0, None, unit="s", why="the run before the record"),
+                    "transition_m": positive("m", "the transition into the curve")}
+    FIELD_LIST_RULES = {"speeds_m_per_s": (True, True), "valve_settings": (True, True)}
+
+
+def curve_at(ride: RideTest, speed_m_per_s: float, vehicle: VehicleParams) -> Tuple[CurveTest, float]:
+    """The curve-entry run of one speed and the time its record starts [s]."""
+    car = vehicle.bogie_centre_distance_m + vehicle.wheelbase_m
+    v = float(speed_m_per_s)
+    if ride.radius_m is None:
+        straight = car + v * (ride.settle_s + ride.record_s) + TRACK_MARGIN_M
+        curve = CurveTest(speed_m_per_s=v, straight_m=straight, transition_m=15.0, radius_m=1.0e4, arc_m=20.0,
+                          duration_s=ride.settle_s + ride.record_s, valve_settings=ride.valve_settings,
+                          irregularity=ride.irregularity, window_s=min(5.0, ride.settle_s + ride.record_s))
+        return curve, ride.settle_s
+    # the whole car in the arc: the rear wheelset (at s = v t) past its start
+    in_arc = (20.0 + ride.transition_m) / v
+    start = max(ride.settle_s, in_arc)
+    arc = v * (start + ride.record_s) + car + TRACK_MARGIN_M - 20.0 - ride.transition_m
+    curve = CurveTest(speed_m_per_s=v, straight_m=20.0, transition_m=ride.transition_m, radius_m=ride.radius_m,
+                      arc_m=arc, cant_rad=ride.cant_rad, duration_s=start + ride.record_s,
+                      valve_settings=ride.valve_settings, irregularity=ride.irregularity,
+                      window_s=min(5.0, start + ride.record_s))
+    return curve, start
+
+
+def parse(data, vehicle: VehicleParams, path: Path) -> RideTest:
+    """The ``ride`` section: speeds, record, track; the irregularity checked (and generated once)
+    on the track of every speed."""
+    data = dict(data) if isinstance(data, Mapping) else data
+    irregularity = data.pop("irregularity", DEFAULT_IRREGULARITY) if isinstance(data, dict) else None
+    ride = build(RideTest, data, path, ["ride"])
+    for i, v in enumerate(ride.speeds_m_per_s):
+        if not 0.0 < v <= MAX_SPEED_M_PER_S:
+            raise ScenarioError(path, ["ride", f"speeds_m_per_s[{i}]"], f"expected a speed in (0, {MAX_SPEED_M_PER_S:g}] "
+                                                                       f"m/s, got {v:g}")
+    if ride.record_s < 5.0:
+        raise ScenarioError(path, ["ride", "record_s"], f"the record must hold one 5 s block, got {ride.record_s:g} s")
+    if ride.radius_m is not None and not ride.radius_m > 0.0:
+        raise ScenarioError(path, ["ride", "radius_m"], f"expected null (straight) or a radius > 0 m, got {ride.radius_m:g}")
+    check_valve_settings(ride.valve_settings, path, ["ride", "valve_settings"])
+    if irregularity is None:
+        return ride
+    spec = None
+    for v in ride.speeds_m_per_s:
+        curve, _ = curve_at(ride, v, vehicle)
+        try:
+            curve.track()
+        except ValueError as exc:
+            raise ScenarioError(path, ["ride"], f"the track at {v:g} m/s cannot be built: {exc}") from None
+        spec = parse_irregularity(irregularity, curve, vehicle, path, ("ride", "irregularity"))
+    return dataclasses.replace(ride, irregularity=spec)
+
+
+def duration_s(ride: RideTest) -> float:
+    """How long the longest case runs [s]: in a curve the slowest speed waits longest for the
+    whole car to be in the arc."""
+    if ride.radius_m is None:
+        return ride.settle_s + ride.record_s
+    return max(ride.settle_s, (20.0 + ride.transition_m) / min(ride.speeds_m_per_s)) + ride.record_s
+
+
+def valve_settings(ride: RideTest, valves: bool) -> Tuple[bool, ...]:
+    return ride.valve_settings
+
+
+def extra_files(ride: RideTest) -> Tuple[Path, ...]:
+    spec = ride.irregularity
+    return (Path(spec.file),) if spec is not None and spec.file is not None else ()
+
+
+def make_car(scenario: Scenario):
+    """The car of the first speed's run (:func:`run` builds each speed's through its curve)."""
+    ride = scenario.ride
+    return curve_entry.make_car(_speed_scenario(scenario, curve_at(ride, ride.speeds_m_per_s[0], scenario.vehicle)[0]))
+
+
+def _speed_scenario(scenario: Scenario, curve: CurveTest) -> Scenario:
+    """The scenario of one speed: a curve-entry run on its track, for the car kinds' machinery."""
+    return dataclasses.replace(scenario, kind="curve_entry", section="curve", experiment=curve)
+
+
+def run(scenario: Scenario, progress: Progress) -> Outcome:
+    """Every speed, k value and valve setting; per case its summary row with the comfort over the
+    record."""
+    t0 = time.perf_counter()
+    ride = scenario.ride
+    progress(f"ride at {', '.join(f'{v:g}' for v in ride.speeds_m_per_s)} m/s, "
+             f"{'straight track' if ride.radius_m is None else f'R = {ride.radius_m:g} m'}, {ride.record_s:g} s "
+             f"records; {len(scenario.k_W_per_K)} k values x valves {ride.valve_settings}")
+    rows, series, diagnoses, cases = [], {}, [], []
+    for v in ride.speeds_m_per_s:
+        curve, start = curve_at(ride, v, scenario.vehicle)
+        ds, found = curve_entry.simulate(_speed_scenario(scenario, curve), progress)
+        diagnoses += [f"{v:g} m/s: {d}" for d in found]
+        series[f"ride_v={v:g}"] = ds
+        for j in range(ds.sizes["case"]):
+            case = ds.isel(case=j)
+            row = {"speed_m_per_s": float(v), **curve_entry.summary_row(case, curve), "record_from_s": start}
+            row.update(comfort_columns(case, start))
+            rows.append(row)
+    metrics = {m: largest(r.get(m, np.nan) for r in rows) for m in KIND.headline_metrics} if rows else {}
+    for r in rows:
+        cases.append(CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, np.nan) for m in KIND.check_metrics}))
+    shown = ("speed_m_per_s", "valves", "k_W_per_K", *(c.format(p) for c in COLUMNS for p in FLOOR_POINTS),
+             "roll_max_rad", "air_injected_kg")
+    info = {"record_s": ride.record_s, "speeds_m_per_s": list(ride.speeds_m_per_s),
+            "irregularity": None if ride.irregularity is None else ride.irregularity.psd or ride.irregularity.file}
+    warnings = []
+    if ride.record_s < 300.0:
+        warnings.append(f"records of {ride.record_s:g} s: EN 12299 evaluates N_MV over 300 s; the percentiles rest on "
+                        f"{int(ride.record_s // 5)} blocks")
+    return Outcome(scenario, rows, shown, series, metrics, cases, diagnoses, warnings, info, time.perf_counter() - t0)
+
+
+def figures(outcome: Outcome) -> List[Figure]:
+    """Comfort against speed (a line per k and valve setting, a panel per floor point and index)
+    and the power spectra of the lateral and vertical floor accelerations at the car centre."""
+    rows = outcome.rows
+    if not rows:
+        return []
+    keys = sorted({(r["valves"], r["k_W_per_K"]) for r in rows})
+    multi = len({r["valves"] for r in rows}) > 1
+
+    def label(valves, k):
+        return (f"valves {'on' if valves else 'off'}, " if multi else "") + k_legend(k)
+
+    panels = []
+    for column, name in (("N_MV_{}", "N_MV [-]"), ("Wz_y_{}", "Wz lateral [-]"), ("Wz_z_{}", "Wz vertical [-]")):
+        for point in FLOOR_POINTS:
+            curves = []
+            for valves, k in keys:
+                mine = sorted((r["speed_m_per_s"], r.get(column.format(point), np.nan)) for r in rows
+                              if (r["valves"], r["k_W_per_K"]) == (valves, k))
+                curves.append(Curve([m[0] for m in mine], [m[1] for m in mine], label(valves, k), "o-"))
+            panels.append(Panel(curves, "speed v [m/s]", name, f"floor, {point}"))
+    out = [Figure("comfort_vs_speed.png", panels, "Ride comfort against speed (EN 12299 N_MV, Sperling Wz)", 3)]
+    psd = []
+    from scipy.signal import welch
+    for name, ds in outcome.series.items():
+        t = ds["time"].values
+        fs = 1.0 / float(np.median(np.diff(t)))
+        start = next(r["record_from_s"] for r in rows if f"ride_v={r['speed_m_per_s']:g}" == name)
+        keep = t >= start
+        for axis, long in (("y", "lateral"), ("z", "vertical")):
+            curves = []
+            for j in range(ds.sizes["case"]):
+                a = ds[f"floor_a{axis}_m_per_s2"].isel(case=j).sel(floor_point="centre").values[keep]
+                if a.size < 16 or not np.isfinite(a).all():
+                    continue
+                f, p = welch(a - a.mean(), fs=fs, nperseg=min(a.size, int(20 * fs)))
+                case = ds.isel(case=j)
+                curves.append(Curve(f[1:], p[1:], label(bool(case["valves"]), float(case["k_W_per_K"]))))
+            psd.append(Panel(curves, "frequency f [Hz]", f"PSD of the {long} floor acceleration [(m/s²)²/Hz]",
+                             f"{name.split('=')[1]} m/s, car centre", logx=True, logy=True))
+    out.append(Figure("psd_floor.png", psd, "Floor accelerations at the car centre: power spectral density (Welch)", 2))
+    return out
+
+
+def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+    """N_MV and Wz at the car centre against speed, a line per run and k."""
+    panels = []
+    for column, name in (("N_MV_centre", "N_MV, car centre [-]"), ("Wz_y_centre", "Wz lateral, car centre [-]"),
+                         ("Wz_z_centre", "Wz vertical, car centre [-]")):
+        curves = []
+        for d, _ in infos:
+            rows = read_rows(d / "summary.csv") if (d / "summary.csv").exists() else []
+            by_case: Dict[Tuple[str, str], List[Tuple[float, float]]] = {}
+            for r in rows:
+                if select.k is not None and float(r["k_W_per_K"]) not in select.k:
+                    continue
+                by_case.setdefault((r["valves"], r["k_W_per_K"]), []).append((float(r["speed_m_per_s"]), float(r[column])))
+            for (valves, k), points in by_case.items():
+                points.sort()
+                curves.append(Curve([p[0] for p in points], [p[1] for p in points],
+                                    label(d, f"valves {'on' if valves == 'True' else 'off'}, k = {k} W/K"), "o-"))
+        panels.append(Panel(curves, "speed v [m/s]", name))
+    return [save_panels(out_dir / "compare_ride.png", panels, f"Ride comfort comparison{window}", ncols=3)]
+
+
+KIND = Kind("ride", "ride", RideTest, __name__, car=True,
+            check_metrics=tuple(c.format(p) for c in COLUMNS for p in FLOOR_POINTS),
+            # the comfort indices over the record; roll and air as in a curve run
+            headline_metrics=(*(c.format(p) for c in COLUMNS for p in FLOOR_POINTS), "roll_max_rad", "air_injected_kg"),
+            plot_metrics=("N_MV_centre", "Wz_y_centre", "Wz_z_centre"))
