@@ -10,6 +10,7 @@ by SIGINT (Ctrl-C) / SIGTERM (what was computed is kept; a sweep resumes when re
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import math
 import signal
@@ -132,6 +133,8 @@ def build_parser() -> argparse.ArgumentParser:
     where.add_argument("--dask", action="store_true", help="run on a Dask LocalCluster of --jobs worker processes")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="run on an existing Dask cluster, e.g. tcp://host:8786 (shared file system)")
+    w.add_argument("--connect-timeout", type=float, default=5.0, metavar="SECONDS",
+                   help="how long the --scheduler may take to accept a connection (default 5 s)")
     w.add_argument("--check", action="store_true",
                    help="evaluate the base scenario's checks: in every case; exit 1 naming the cases that fail")
     w.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -151,6 +154,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--k", type=_k_list, default=None, help="only these k values [W/K], e.g. 0,inf")
     c.add_argument("--time", type=_argument("parse_window"), default=None, metavar="T0,T1",
                    help="only this time window [s], e.g. 5,15")
+    c.add_argument("--allow-incomplete", action="store_true",
+                   help="draw interrupted or unfinished runs too, marked 'interrupted' in the legend")
     return p
 
 
@@ -163,7 +168,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             from cosim.results.compare import Selection, compare_runs
             select = Selection(args.wheels, tuple(args.k) if args.k else None, args.time)
             out = args.out or args.dirs[0].resolve().parent / f"compare_{args.dirs[0].resolve().name}"
-            for path in compare_runs(args.dirs, out, overlays(), select):
+            for path in compare_runs(args.dirs, out, overlays(), select, args.allow_incomplete):
                 print(path)
             return EXIT_OK
         if args.command == "comfort":
@@ -235,23 +240,46 @@ def _sweep_spec(args, path: Path):
     return spec
 
 
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """In a sweep's main process SIGTERM stops the sweep as Ctrl-C does: the executor's workers
+    are stopped, finished cases kept, the tables written with the pending rows. Yields a list
+    that holds the signal once it came (the command then exits 143)."""
+    received: List[int] = []
+
+    def handler(signum, frame):
+        received.append(signum)
+        raise KeyboardInterrupt
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def _sweep(args) -> int:
+    from cosim.results.outdir import FolderLock
     from cosim.sweep.executors import make_executor
     from cosim.sweep.study import prepare, run_sweep
     spec = _sweep_spec(args, args.scenario)
     file = spec.source or spec.scenario_file
     jobs = 2 if args.jobs is None else _jobs(args.jobs, file)
-    executor = make_executor(jobs, dask=args.dask, scheduler=args.scheduler)
+    if not args.connect_timeout > 0:
+        raise ScenarioError(file, ["--connect-timeout"], f"expected a time > 0 s, got {args.connect_timeout:g}")
+    executor = make_executor(jobs, dask=args.dask, scheduler=args.scheduler, connect_timeout_s=args.connect_timeout)
     prepared = prepare(spec, check=args.check)
     out = args.out or Path("results") / (spec.name or f"{prepared.base.name}_sweep")
-    outcome = run_sweep(prepared, out, executor, quiet=args.quiet)
+    # the folder is held for the whole sweep: a second sweep into it is refused (exit 2), and one
+    # that cannot be written is refused before anything runs
+    with FolderLock(out, "sweep"), _terminate_as_interrupt() as terminated:
+        outcome = run_sweep(prepared, out, executor, quiet=args.quiet)
     print(outcome.report())
     print(f"results in {out}/ (sweep.csv, cases/<case>/)")
     if outcome.interrupted:
         done = sum(1 for c in prepared.cases if outcome.status(c) in ("ok", "diverged"))
-        print(f"interrupted: {done} of {len(prepared.cases)} cases finished and kept; rerun the same command "
-              f"to resume (finished cases are skipped)", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        print(f"interrupted{' by SIGTERM' if terminated else ''}: {done} of {len(prepared.cases)} cases finished and "
+              f"kept; rerun the same command to resume (finished cases are skipped)", file=sys.stderr)
+        return 128 + signal.SIGTERM if terminated else EXIT_INTERRUPTED
     if args.check:
         print(outcome.check_report())
         if outcome.check_failures():
@@ -324,16 +352,21 @@ def _validate(args) -> int:
 
 def _verify(args) -> int:
     from cosim.kinds import KINDS
+    from cosim.results.outdir import FolderLock
+    from cosim.scenario.model import VerifySettings
+    from cosim.scenario.schema import range_of
     from cosim.verification.verify import report, verify
     scenario = _load(args)
     if not KINDS[scenario.kind].car:
         cars = ", ".join(k.name for k in KINDS.values() if k.car)
         raise ScenarioError(args.scenario, ["kind"], f"verify needs a car scenario ({cars}), got {scenario.kind}")
     levels = scenario.verify.levels if args.levels is None else args.levels
-    if levels < 2:
-        raise ScenarioError(args.scenario, ["--levels"], f"Richardson extrapolation needs at least 2 halvings, got {levels}")
+    allowed = range_of(VerifySettings, "levels")               # the same range as the verify.levels key
+    if not allowed.admits(levels):
+        raise ScenarioError(args.scenario, ["--levels"], f"expected {allowed.expected(integer=True)}, got {levels}")
     out = args.out or Path("results") / f"{scenario.name}_verify"
-    found, diverged = verify(scenario, out, levels, Progress(scenario.name, quiet=args.quiet))
+    with FolderLock(out, "verify"):
+        found, diverged = verify(scenario, out, levels, Progress(scenario.name, quiet=args.quiet))
     print(report(found, scenario.verify.tolerance))
     print(f"results in {out}/")
     if diverged:

@@ -38,9 +38,11 @@ CAR_SECTIONS = (
 CIRCUIT_SECTIONS = (
     ("circuit.bellow", Bellow, "also `type: bellow` in circuit.components"),
     ("circuit.tank", Tank, "also `type: tank`; `tank: null` = no tank"),
-    ("circuit.pipe, circuit.cross_pipe", Pipe, "also `type: pipe`; a, b: the nodes it joins"),
+    ("circuit.pipe, circuit.cross_pipe", Pipe, "also `type: pipe`; a, b: the nodes it joins; `cross_pipe: null` = none"),
     ("circuit.supply", Supply, "also `type: supply`"),
-    ("circuit.levelling_valve", LevellingValve, "also `type: levelling_valve`"),
+    ("circuit.levelling_valve", LevellingValve, "also `type: levelling_valve`; `{}`: the defaults; null is refused "
+                                                "(the valve settings connect the valves: `valve_settings: [false]` runs "
+                                                "without them)"),
     ("circuit.differential_valve", DifferentialPressureValve, "also `type: differential_valve`; null = none"),
     ("circuit.components: type: safety_valve", SafetyValve, "explicit circuits only"),
     ("circuit.components: type: orifice", Orifice, "explicit circuits only"),

@@ -29,7 +29,18 @@ from cosim.scenario.model import (
     VerifySettings,
 )
 from cosim.scenario.presets import VEHICLE_PRESETS
-from cosim.scenario.schema import MAX_SAMPLES, MAX_STEPS, build, check_keys, coerce, describe, k_values, require
+from cosim.scenario.schema import (
+    MAX_SAMPLES,
+    MAX_STEPS,
+    build,
+    check_keys,
+    coerce,
+    describe,
+    folder_name,
+    k_values,
+    known_name,
+    require,
+)
 from cosim.scenario.yaml_input import MAX_BYTES, parse_yaml, read_yaml
 from vehicle.params import TRACK_MODELS, TRACK_PRESETS, TrackStructure, VehicleParams
 
@@ -156,15 +167,7 @@ def _name(data: Mapping, path: Path) -> str:
     so it must be usable as one folder name."""
     if "name" not in data:
         return path.stem
-    value = data["name"]
-    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-        raise ScenarioError(path, ["name"], f"expected a string, got {describe(value)}")
-    name = str(value)
-    if (not name.strip() or name in (".", "..") or any(c in name for c in "/\\") or any(ord(c) < 32 for c in name)
-            or len(name) > 100):
-        raise ScenarioError(path, ["name"], f"expected a name usable as a folder name (no / or \\, no control "
-                                            f"characters, at most 100 characters), got {name!r}")
-    return name
+    return folder_name(data["name"], path, ["name"])
 
 
 def _description(data: Mapping, path: Path) -> str:
@@ -253,10 +256,7 @@ def _vehicle(value, file) -> VehicleParams:
         if "preset" in value:
             if base is not None:
                 raise ScenarioError(file, ["vehicle", "preset"], "give a preset or a file, not both")
-            name = value["preset"]
-            if name not in VEHICLE_PRESETS:
-                raise ScenarioError(file, ["vehicle", "preset"], f"unknown vehicle preset {name!r} "
-                                                                 f"(expected one of {', '.join(VEHICLE_PRESETS)})")
+            name = known_name(value["preset"], VEHICLE_PRESETS, file, ["vehicle", "preset"], "vehicle preset")
             defaults = dataclasses.asdict(VEHICLE_PRESETS[name]())
             value = {k: v for k, v in value.items() if k != "preset"}
         if base is not None:
@@ -298,10 +298,7 @@ def _track_structure(value, file) -> TrackStructure:
         if extra:
             raise ScenarioError(file, ["track", extra[0]], "a rigid track takes no parameters (model: flexible does)")
         return TrackStructure()
-    name = value.get("preset", DEFAULT_TRACK_PRESET)
-    if name not in TRACK_PRESETS:
-        raise ScenarioError(file, ["track", "preset"], f"unknown track preset {name!r} "
-                                                       f"(expected one of {', '.join(TRACK_PRESETS)})")
+    name = known_name(value.get("preset", DEFAULT_TRACK_PRESET), TRACK_PRESETS, file, ["track", "preset"], "track preset")
     defaults = {k: v for k, v in dataclasses.asdict(TRACK_PRESETS[name]()).items() if k != "model"}
     return build(TrackStructure, {**defaults, **fields}, file, ["track"], model="flexible")
 

@@ -143,6 +143,9 @@ COLUMNS = ("s_m", "lateral_m", "vertical_m", "cross_level_m", "gauge_m")
 MAX_ABS_IRREGULARITY_M = 0.1  # a larger value is taken for a unit mistake (mm written as m)
 DEFAULT_WAVELENGTH_RANGE_M = (3.0, 150.0)  # EN 14363 / EN 13848 bands D1 (3-25), D2 (25-70), D3 (70-150)
 PERIOD_FACTOR = 8.0  # period of the generated signal >= this many longest wavelengths
+#: the most samples a generated irregularity (or its period) may take: 1e7 x 8 bytes per channel,
+#: under half a gigabyte for all of them together
+MAX_SAMPLES = 10_000_000
 
 # --- PSD coefficients (see the module docstring for sources and how sure they are) ---------------
 _ERRI_OMEGA_C = 0.8246  # rad/m
@@ -382,8 +385,13 @@ class TrackIrregularity:
         if not (math.isfinite(max_abs_m) and max_abs_m > 0.0):
             raise ValueError(f"max_abs_m must be a finite number > 0 (m), got {max_abs_m!r}")
         where = str(path)
-        with path.open("r", newline="", encoding="utf-8-sig") as fh:
-            lines = list(enumerate(fh.read().splitlines(), start=1))
+        try:
+            with path.open("r", newline="", encoding="utf-8-sig") as fh:
+                lines = list(enumerate(fh.read().splitlines(), start=1))
+        except UnicodeDecodeError as exc:
+            # a binary file, or text in another encoding (UTF-16 from a spreadsheet): say which file
+            raise ValueError(f"{where}: not a UTF-8 text CSV (byte {exc.start} cannot be decoded: {exc.reason}); "
+                             f"save it as UTF-8 (or ASCII) text") from None
         rows = [(i, line) for i, line in lines if line.strip() and not line.lstrip().startswith("#")]
         if not rows:
             raise ValueError(f"{where}: empty file; expected a header line "
@@ -436,6 +444,7 @@ class TrackIrregularity:
         return cls(*(data.get(c, zeros) for c in COLUMNS), source=where)
 
     # --- PSD generation ----------------------------------------------------------------------
+
     @classmethod
     def from_psd(cls, kind: str, length_m: Number, ds_m: Number, seed: int,
                  wavelength_range_m: Sequence[Number] = DEFAULT_WAVELENGTH_RANGE_M,
@@ -462,6 +471,15 @@ class TrackIrregularity:
         chosen = [_check_channel(c) for c in channels]
 
         period = max(length_m, PERIOD_FACTOR * hi)
+        n_samples = math.ceil(length_m / ds_m - 1e-9) + 1
+        n_largest = max(n_samples, period / ds_m)
+        if n_largest > MAX_SAMPLES:
+            # refused before anything is allocated: a slip of ds_m, the track or the band would
+            # otherwise end in an out-of-memory kill
+            raise ValueError(f"{n_largest:.3g} samples (the track's {length_m:g} m, or {PERIOD_FACTOR:g} x the longest "
+                             f"wavelength {hi:g} m, at ds_m = {ds_m:g} m; about {n_largest * 8 * (2 + len(chosen)) / 1e9:.3g} "
+                             f"GB), more than {MAX_SAMPLES:.0e}: make ds_m larger, or the track or the longest wavelength "
+                             f"shorter")
         d_omega = 2.0 * math.pi / period
         w_min, w_max = 2.0 * math.pi / hi, 2.0 * math.pi / lo
         # every harmonic whose cell [Omega_k - dOmega/2, Omega_k + dOmega/2] overlaps the band
@@ -471,7 +489,6 @@ class TrackIrregularity:
         omega = k * d_omega
         cell_lo = np.maximum(omega - 0.5 * d_omega, w_min)
         cell_hi = np.minimum(omega + 0.5 * d_omega, w_max)
-        n_samples = math.ceil(length_m / ds_m - 1e-9) + 1
         s = np.arange(n_samples) * ds_m
         n_period = period / ds_m
         use_fft = abs(n_period - round(n_period)) < 1e-9 * n_period and k_hi < round(n_period) / 2

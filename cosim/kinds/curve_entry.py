@@ -30,7 +30,7 @@ from cosim.results.plots import Curve, Figure, Panel, save_panels
 from cosim.results.series import WHEELSETS, with_column
 from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
 from cosim.scenario.schema import Range, build, check_valve_settings, describe, positive
-from vehicle.irregularities import CHANNELS, TrackIrregularity, canonical_kind
+from vehicle.irregularities import CHANNELS, MAX_SAMPLES, PERIOD_FACTOR, TrackIrregularity, canonical_kind
 from vehicle.params import BELLOWS, WHEELS, ContactParams, VehicleParams
 from vehicle.track import TRANSITION_SHAPES, TrackGeometry
 
@@ -281,8 +281,8 @@ def parse_irregularity(value, curve: CurveTest, vehicle: VehicleParams, path, wh
     try:
         irr = dataclasses.replace(curve, irregularity=spec).track_irregularity(vehicle)
     except ValueError as exc:
-        key = "file" if spec.file is not None else "taper_m" if "taper_m" in str(exc) else "psd"
-        raise ScenarioError(path, [*where, key], f"cannot build the irregularity: {exc}") from None
+        raise ScenarioError(path, _irregularity_culprit(spec, curve, where, str(exc)),
+                            f"cannot build the irregularity: {exc}") from None
     # the car starts in static equilibrium on design track: nothing under it at t = 0
     car_length = vehicle.bogie_centre_distance_m + vehicle.wheelbase_m
     s = np.linspace(0.0, car_length, 241)
@@ -292,6 +292,22 @@ def parse_irregularity(value, curve: CurveTest, vehicle: VehicleParams, path, wh
                             f"the irregularity must be 0 under the car at t = 0 (s = 0 ... {car_length:g} m, the "
                             f"rear wheelset at s = 0); it reaches {worst * 1e3:.3g} mm there")
     return spec
+
+
+def _irregularity_culprit(spec: IrregularitySpec, curve: CurveTest, where, message: str) -> list:
+    """The key an irregularity that cannot be built is blamed on: for too many samples the longest
+    wavelength if even the coarsest spacing could not hold its period, the irregularity itself if
+    the track is too long for it, else the spacing."""
+    if spec.file is not None:
+        return [*where, "file"]
+    if "samples" in message:
+        coarsest = 0.5 * spec.wavelength_range_m[0]
+        if PERIOD_FACTOR * spec.wavelength_range_m[1] / coarsest > MAX_SAMPLES:
+            return [*where, "wavelength_range_m"]
+        if curve.track().total_length_m / coarsest > MAX_SAMPLES:
+            return list(where)
+        return [*where, "ds_m"]
+    return [*where, "taper_m" if "taper_m" in message else "psd"]
 
 
 def duration_s(curve: CurveTest) -> float:

@@ -101,7 +101,7 @@ def source_commit() -> Dict[str, object]:
     import subprocess
     root = Path(__file__).resolve().parent.parent
     try:
-        run = lambda *args: subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True,  # noqa: E731
+        run = lambda *args: subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True,
                                            timeout=5, check=True).stdout.strip()
         if Path(run("rev-parse", "--show-toplevel")).resolve() != root:
             return {}

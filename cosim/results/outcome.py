@@ -5,12 +5,12 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 from cosim.limits.checks import CaseMetrics, check_report, check_value, passes
+from cosim.limits.validity import failures
 from cosim.scenario.checks import Check
 from cosim.scenario.model import Scenario
-from cosim.limits.validity import failures
 
 #: warnings about results (validity, settling) go here, not through the progress lines: --quiet
 #: silences progress only

@@ -43,12 +43,15 @@ def _alive(pid: int) -> bool:
     return True
 
 
-class OutputFolder:
-    """Context manager around one run's output folder (module doc). Errors are
-    :class:`ScenarioError` on ``--out`` (bad input: exit 2), raised before anything runs."""
+class FolderLock:
+    """A folder held by one process while it writes there: created if need be, then a lock file
+    with the holder's process id, made exclusively; a lock whose process is gone is taken over.
+    Errors are :class:`ScenarioError` on ``--out`` (exit 2), raised before anything runs: a folder
+    that cannot be written, or one another process is writing into. Used by sweeps and verify
+    (which resume into their folder) and by :class:`OutputFolder`."""
 
-    def __init__(self, path: Path, overwrite: bool = False):
-        self.path, self.overwrite = Path(path), overwrite
+    def __init__(self, path: Path, what: str = "run"):
+        self.path, self.what = Path(path), what
 
     def _refuse(self, message: str):
         raise ScenarioError(self.path, ["--out"], message)
@@ -58,31 +61,57 @@ class OutputFolder:
         if p.exists() and not p.is_dir():
             self._refuse("exists and is not a folder")
         lock = p / LOCK
-        if lock.exists():
+        for _ in range(2):
             try:
-                pid = int(lock.read_text().strip() or 0)
-            except (OSError, ValueError):
-                pid = 0
-            if pid and pid != os.getpid() and _alive(pid):
-                self._refuse(f"another run (process {pid}) is writing into this folder")
-        if p.is_dir() and any((p / m).exists() for m in RUN_MARKERS):
-            if not self.overwrite:
-                self._refuse("holds a previous run; choose another --out or add --overwrite to replace it")
-            for entry in p.iterdir():
-                shutil.rmtree(entry) if entry.is_dir() and not entry.is_symlink() else entry.unlink()
+                p.mkdir(parents=True, exist_ok=True)
+                fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+                with os.fdopen(fd, "w") as fh:
+                    fh.write(str(os.getpid()))
+                return p
+            except FileExistsError:
+                try:
+                    pid = int(lock.read_text().strip() or 0)
+                except (OSError, ValueError):
+                    pid = 0
+                if pid and pid != os.getpid() and _alive(pid):
+                    self._refuse(f"another {self.what} (process {pid}) is writing into this folder")
+                lock.unlink(missing_ok=True)            # left by a process that is gone
+            except OSError as exc:
+                self._refuse(f"cannot be written ({exc.strerror})")
+        self._refuse(f"another {self.what} started writing into this folder just now")
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        (self.path / LOCK).unlink(missing_ok=True)
+
+
+class OutputFolder:
+    """Context manager around one run's output folder (module doc). Errors are
+    :class:`ScenarioError` on ``--out`` (bad input: exit 2), raised before anything runs."""
+
+    def __init__(self, path: Path, overwrite: bool = False):
+        self.path, self.overwrite = Path(path), overwrite
+        self._lock = FolderLock(path)
+
+    def __enter__(self) -> Path:
+        p = self._lock.__enter__()
         try:
-            p.mkdir(parents=True, exist_ok=True)
-            fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
-            with os.fdopen(fd, "w") as fh:
-                fh.write(str(os.getpid()))
-            (p / INCOMPLETE).write_text("this run has not finished writing its results\n")
-        except FileExistsError:
-            self._refuse("another run started writing into this folder just now")
-        except OSError as exc:
-            self._refuse(f"cannot be written ({exc.strerror})")
+            if any((p / m).exists() for m in RUN_MARKERS if m != LOCK):
+                if not self.overwrite:
+                    raise ScenarioError(p, ["--out"], "holds a previous run; choose another --out or add --overwrite "
+                                                      "to replace it")
+                for entry in p.iterdir():
+                    if entry.name != LOCK:
+                        shutil.rmtree(entry) if entry.is_dir() and not entry.is_symlink() else entry.unlink()
+            try:
+                (p / INCOMPLETE).write_text("this run has not finished writing its results\n")
+            except OSError as exc:
+                raise ScenarioError(p, ["--out"], f"cannot be written ({exc.strerror})") from None
+        except BaseException:
+            self._lock.__exit__(None, None, None)
+            raise
         return p
 
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is None:
             (self.path / INCOMPLETE).unlink(missing_ok=True)
-        (self.path / LOCK).unlink(missing_ok=True)
+        self._lock.__exit__(exc_type, exc, tb)

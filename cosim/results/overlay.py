@@ -10,10 +10,9 @@ from typing import Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from vehicle.params import WHEELS
-
-from cosim.results.io import read_rows
 from cosim.errors import ScenarioError
+from cosim.results.io import read_rows
+from vehicle.params import WHEELS
 
 
 @dataclass(frozen=True)

@@ -14,10 +14,9 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 import xarray as xr
 
-from vehicle.params import BELLOWS, FLOOR_POINTS, WHEELS
-
 from cosim.master import OUTPUTS
 from cosim.scenario.schema import k_label
+from vehicle.params import BELLOWS, FLOOR_POINTS, WHEELS
 
 #: wheelsets, "1" ... "4" from the front (from the car's wheel names)
 WHEELSETS = tuple(dict.fromkeys(wheel[:-1] for wheel in WHEELS))

@@ -1,6 +1,7 @@
-"""Turn an :class:`~cosim.results.outcome.Outcome` into files: the time series (CSV, one file per case),
-``summary.csv`` and the outcome's further tables (``<name>.csv``), the figures (PNG) and ``run.json`` (provenance, status, metrics, diagnoses,
-warnings), in that order; every file is written atomically."""
+"""Turn an :class:`~cosim.results.outcome.Outcome` into files: the time series (CSV, one file per
+case), ``summary.csv`` and the outcome's further tables (``<name>.csv``), the figures (PNG) and
+``run.json`` (provenance, status, metrics, diagnoses, warnings), in that order; every file is
+written atomically."""
 from __future__ import annotations
 
 import dataclasses
@@ -11,9 +12,9 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Sequence
 
+from cosim.results.io import atomic_write, jsonable, write_columns, write_rows, write_run_json
 from cosim.results.outcome import Outcome
 from cosim.results.plots import Figure
-from cosim.results.io import atomic_write, jsonable, write_columns, write_rows, write_run_json
 from cosim.results.series import case_columns
 
 

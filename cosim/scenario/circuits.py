@@ -8,7 +8,7 @@ from typing import Any, Dict, Mapping, Sequence
 
 from cosim.errors import ScenarioError
 from cosim.scenario.model import CarCircuit
-from cosim.scenario.schema import build, check_keys, coerce, describe, require
+from cosim.scenario.schema import build, check_keys, coerce, describe, known_name, require
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import COMPONENT_TYPES, Circuit, CircuitError
@@ -23,10 +23,7 @@ def with_preset(data: Mapping, file, sections: Sequence[str]) -> Dict[str, Any]:
     ``p0_Pa``) under what the scenario writes, field by field; ``tank: null`` stays null."""
     if "preset" not in data:
         return dict(data)
-    name = data["preset"]
-    if name not in CIRCUIT_PRESETS:
-        raise ScenarioError(file, ["circuit", "preset"], f"unknown circuit preset {name!r} "
-                                                         f"(expected one of {', '.join(CIRCUIT_PRESETS)})")
+    name = known_name(data["preset"], CIRCUIT_PRESETS, file, ["circuit", "preset"], "circuit preset")
     preset = CIRCUIT_PRESETS[name]()
     merged = {k: v for k, v in data.items() if k != "preset"}
     for key in sections:
@@ -131,6 +128,12 @@ def car_circuit(data: Mapping, file) -> CarCircuit:
     P = ["circuit"]
     bellow, tank, pipe = chambers_and_pipe(data, file)
     valves = coerce(data.get("valves", False), bool, file, P + ["valves"])
+    if "levelling_valve" in data and data["levelling_valve"] is None:
+        # null means "none" for tank, differential_valve and cross_pipe; a car's valve settings
+        # connect levelling valves, so none cannot be meant here: refused, not read as the defaults
+        raise ScenarioError(file, P + ["levelling_valve"], "null would mean no levelling valve, but the valve settings "
+                                                           "connect them: write {} for the defaults, or run with the "
+                                                           "valves disconnected (valve_settings: [false])")
     lv = build(LevellingValve, data.get("levelling_valve"), file, P + ["levelling_valve"],
                bellow="", supply="supply", sensed=())
     dpv = optional(DifferentialPressureValve, data, "differential_valve", file, P, a="", b="")

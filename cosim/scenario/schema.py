@@ -19,6 +19,7 @@ import typing
 from typing import Any, Dict, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 from cosim.errors import ScenarioError
+from vehicle.params import VehicleParams
 
 _NUMBER_STRING = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)[eE][+-]?\d+$")
 
@@ -35,8 +36,12 @@ class Range(NamedTuple):
     unit: str = ""
     why: str = ""
     nonzero: bool = False
+    #: 0 (an absent component) and inf (a rigid one) allowed besides the bounds
+    zero_or_inf: bool = False
 
     def admits(self, v: float) -> bool:
+        if self.zero_or_inf and (v == 0 or v == math.inf):
+            return True
         if self.nonzero and v == 0:
             return False
         if self.low is not None and not (v >= self.low if self.low_inclusive else v > self.low):
@@ -59,6 +64,8 @@ class Range(NamedTuple):
             text = a or "a number"
         if self.nonzero:
             text += f" other than 0{u}"
+        if self.zero_or_inf:
+            text = f"0 (none), inf (rigid) or{text}"
         text = text.strip()
         return text + (f" ({self.why})" if self.why else "")
 
@@ -90,15 +97,17 @@ MAX_STEPS = 10_000_000
 RANGES: Dict[str, Range] = {
     # pneumatic components
     "Bellow.dA_dz_m": Range(unit="m", why="change of effective area with crushing, either sign"),
+    "Bellow.area_table_m2": Range(0.0, 2.0, False, True, "m^2", "an airspring's effective area"),
+    "Bellow.area_table_z_m": Range(-0.5, 0.5, unit="m", why="crushing from the static height"),
     "Pipe.length_m": positive("m"),
-    "Pipe.diameter_m": positive("m"),
+    "Pipe.diameter_m": Range(0.0, 0.3, False, True, "m", "a pneumatic pipe's bore"),
     "Pipe.friction_factor": nonnegative(why="Darcy friction factor lambda"),
     "Pipe.zeta": nonnegative(why="pressure-loss coefficient of fittings"),
     "Orifice.b_critical": Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio"),
     "LevellingValve.b_critical": Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio"),
     "LevellingValve.lag_s": nonnegative("s", "0: no lag"),
     "LevellingValve.delay_s": nonnegative("s", "0: no delay"),
-    "LevellingValve.hysteresis_m": nonnegative("m", "0: no play"),
+    "LevellingValve.hysteresis_m": Range(0.0, 0.05, unit="m", why="the lever's play; 0: no play"),
     "LevellingValve.delay_stages": Range(1, 1000, why="first-order stages approximating the delay; "
                                                       "one state each"),
     "SolverSettings.jobs": Range(1, 256, why="worker processes"),
@@ -111,23 +120,51 @@ RANGES: Dict[str, Range] = {
     "VerifySettings.tolerance": Range(0.0, 1.0, False, False, why="a relative error"),
     "VerifySettings.levels": Range(2, 6, why="halvings of every step; each doubles the cost of the last run"),
     # vehicle: every parameter is a mass, inertia, length, height above rail, stiffness, damping or
-    # clearance, none negative (0: the component is absent); these cannot be 0 either
-    "VehicleParams.gravity_m_per_s2": positive("m/s^2"),
-    "VehicleParams.bogie_centre_distance_m": positive("m"),
-    "VehicleParams.wheelbase_m": positive("m"),
-    "VehicleParams.contact_spacing_m": positive("m"),
-    "VehicleParams.wheel_radius_m": positive("m"),
-    "VehicleParams.primary_lateral_spacing_m": positive("m"),
-    "VehicleParams.airspring_lateral_spacing_m": positive("m"),
-    "VehicleParams.primary_stiffness_x_N_per_m": positive("N/m"),
-    "VehicleParams.primary_stiffness_y_N_per_m": positive("N/m"),
-    "VehicleParams.primary_stiffness_z_N_per_m": positive("N/m"),
+    # clearance, none negative (0: the component is absent); the geometry and masses within what
+    # rail vehicles have, from a tram module to a loaded locomotive, so that a value typed in the
+    # wrong unit (tonnes, millimetres) is refused with the slip named
+    "VehicleParams.gravity_m_per_s2": Range(9.7, 9.9, unit="m/s^2", why="gravity on the Earth's surface"),
+    "VehicleParams.carbody_mass_kg": Range(2e3, 1.5e5, unit="kg", why="a carbody"),
+    "VehicleParams.bogie_mass_kg": Range(2e2, 2e4, unit="kg", why="a bogie frame"),
+    "VehicleParams.wheelset_mass_kg": Range(1e2, 5e3, unit="kg", why="a wheelset"),
+    "VehicleParams.bogie_centre_distance_m": Range(2.0, 40.0, unit="m", why="between the bogie centres"),
+    "VehicleParams.wheelbase_m": Range(1.0, 5.0, unit="m", why="a bogie's wheelbase"),
+    "VehicleParams.contact_spacing_m": Range(0.9, 1.8, unit="m", why="between the wheels' contact points, "
+                                                                     "gauges 1000-1676 mm"),
+    "VehicleParams.wheel_radius_m": Range(0.15, 0.8, unit="m", why="a wheel's rolling radius"),
+    "VehicleParams.primary_lateral_spacing_m": Range(0.5, 4.0, unit="m", why="across the car"),
+    "VehicleParams.airspring_lateral_spacing_m": Range(0.5, 4.0, unit="m", why="across the car"),
+    "VehicleParams.secondary_vertical_damper_lateral_spacing_m": Range(0.0, 4.0, unit="m", why="across the car"),
+    "VehicleParams.yaw_damper_lateral_spacing_m": Range(0.0, 4.0, unit="m", why="across the car"),
+    "VehicleParams.arb_link_spacing_m": Range(0.0, 4.0, unit="m", why="across the car; 0: no bar"),
+    "VehicleParams.arb_lever_arm_m": Range(0.0, 2.0, unit="m", why="the bar's lever; 0: no bar"),
+    **{f"VehicleParams.{name}": Range(0.0, 5.0, unit="m", why="a height above the rail top")
+       for name in ("airspring_lower_height_m", "airspring_upper_height_m", "floor_height_m", "carbody_cog_height_m",
+                    "bogie_cog_height_m", "secondary_lateral_damper_height_m", "yaw_damper_height_m",
+                    "traction_rod_height_m")},
+    **{f"VehicleParams.{name}": Range(0.0, 0.3, unit="m", why="a bumpstop's free travel")
+       for name in ("lateral_bumpstop_clearance_m", "vertical_bumpstop_clearance_m")},
+    **{f"VehicleParams.{body}_inertia_{axis}_kg_m2": Range(1.0, 1e8, False, True, "kg m^2", f"a {body}'s inertia")
+       for body in ("carbody", "bogie", "wheelset") for axis in ("xx", "yy", "zz")},
+    # stiffnesses and dampings: 0 (absent) or inf (rigid), else within what suspension elements
+    # have; a value in kN/m or kN s/m typed as N/m is a thousand times too small
+    **{f"VehicleParams.{f.name}": Range(1e3, 1e10, unit="N/m", why="a spring", zero_or_inf=True)
+       for f in dataclasses.fields(VehicleParams) if f.name.endswith("_N_per_m")
+       and not f.name.startswith("primary_stiffness")},
+    **{f"VehicleParams.{f.name}": Range(10.0, 1e7, unit="N s/m", why="a damper", zero_or_inf=True)
+       for f in dataclasses.fields(VehicleParams) if f.name.endswith("_N_s_per_m")},
+    **{f"VehicleParams.{f.name}": Range(1e3, 1e9, unit="N m/rad", why="a torsion spring", zero_or_inf=True)
+       for f in dataclasses.fields(VehicleParams) if f.name.endswith("_N_m_per_rad")},
+    **{f"VehicleParams.primary_stiffness_{axis}_N_per_m": Range(1e3, 1e10, unit="N/m", why="a primary spring")
+       for axis in "xyz"},
     "VehicleParams.hertz_constant_N_per_m1_5": positive("N/m^1.5"),
 }
 
 #: Unit suffix -> range, for fields :data:`RANGES` does not name (longest suffix first):
 #: quantities that only make sense positive (pressures are absolute).
 SUFFIX_RANGES: Tuple[Tuple[str, Range], ...] = (
+    # rates first: a velocity ends in _s too, and its message must say m/s, not s
+    ("_m_per_s", positive("m/s")), ("_kg_per_s", positive("kg/s")), ("_rad_per_s", positive("rad/s")),
     ("_kg_m2", positive("kg m^2")),
     ("_m3", positive("m^3")), ("_m2", positive("m^2")), ("_kg", positive("kg")), ("_Pa", positive("Pa absolute")),
     ("_K", positive("K")), ("_s", positive("s")), ("_Hz", positive("Hz")), ("_m3_per_sPa", positive("m^3/(s Pa)")),
@@ -171,9 +208,25 @@ def range_of(cls, name: str) -> Optional[Range]:
     return None
 
 
+#: unit slips a value out of its range may be: (unit, factor to the right unit, what was typed)
+UNIT_SLIPS = (("kg", 1e3, "tonnes"), ("m", 1e-3, "millimetres"), ("m", 1e-2, "centimetres"),
+              ("kg m^2", 1e3, "t m^2"), ("m^2", 1e-4, "cm^2"), ("N/m", 1e3, "kN/m"), ("N s/m", 1e3, "kN s/m"),
+              ("N m/rad", 1e3, "kN m/rad"))
+
+
+def unit_slip(value: float, rule: Range) -> str:
+    """A hint when ``value`` out of ``rule`` would be in it in the unit a user may have typed
+    instead (tonnes for kg, millimetres for m ...): ``"; tonnes? (26 t = 26000 kg)"``."""
+    for unit, factor, typed in UNIT_SLIPS:
+        if rule.unit == unit and value != 0 and rule.admits(value * factor):
+            return f"; {typed}? ({_num(value)} {typed} = {_num(value * factor)} {unit})"
+    return ""
+
+
 def check_range(value, rule: Optional[Range], file, path: Sequence[str]) -> None:
     if rule is not None and isinstance(value, (int, float)) and not isinstance(value, bool) and not rule.admits(value):
-        raise ScenarioError(file, path, f"must be {rule.expected(isinstance(value, int))}, got {_num(value)}")
+        raise ScenarioError(file, path, f"must be {rule.expected(isinstance(value, int))}, got {_num(value)}"
+                                        f"{unit_slip(value, rule)}")
 
 
 # ----------------------------------------------------------------------------------- types
@@ -371,3 +424,27 @@ def check_valve_settings(settings, path, where) -> None:
 def k_label(k: float) -> str:
     """k for file names and legends: 0, 10, 1e+04, inf."""
     return "inf" if math.isinf(k) else f"{k:g}"
+
+
+def known_name(value, known, file, where, what: str) -> str:
+    """``value`` as one of the names in ``known`` (a preset, a layout ...), or an error naming the
+    key: a list or a mapping where a name belongs is refused as such, not hashed."""
+    if not isinstance(value, str):
+        raise ScenarioError(file, list(where), f"expected a {what} name (one of {', '.join(known)}), got {describe(value)}")
+    if value not in known:
+        raise ScenarioError(file, list(where), f"unknown {what} {value!r} (expected one of {', '.join(known)})")
+    return value
+
+
+def folder_name(value, file, where) -> str:
+    """A ``name`` that names an output folder: one path component, so that nothing is written
+    outside the folder the user chose (no / or \\, not . or .., no control characters, at most 100
+    characters)."""
+    if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise ScenarioError(file, list(where), f"expected a string, got {describe(value)}")
+    name = str(value)
+    if (not name.strip() or name in (".", "..") or any(c in name for c in "/\\") or any(ord(c) < 32 for c in name)
+            or len(name) > 100):
+        raise ScenarioError(file, list(where), f"expected a name usable as a folder name (no / or \\, no control "
+                                               f"characters, at most 100 characters), got {name!r}")
+    return name

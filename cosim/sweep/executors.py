@@ -143,18 +143,33 @@ class Pool:
                     pool.shutdown(wait=True)
 
 
+#: how long a --scheduler address may take to accept a connection [s] (--connect-timeout)
+CONNECT_TIMEOUT_S = 5.0
+
+
 class Dask:
     """Dask distributed: a ``LocalCluster`` of ``jobs`` single-threaded worker processes, or an
     existing cluster at ``scheduler`` (its workers need pneumorail installed and the output
     folder on a shared file system)."""
 
-    def __init__(self, jobs: int, scheduler: Optional[str] = None) -> None:
+    def __init__(self, jobs: int, scheduler: Optional[str] = None, connect_timeout_s: float = CONNECT_TIMEOUT_S) -> None:
         try:
             import distributed  # noqa: F401
         except ImportError:
             raise ExecutorUnavailable(f"{'--scheduler' if scheduler else '--dask'} needs Dask distributed, which is "
                                       f"not installed: {DASK_INSTALL_HINT}") from None
         self.jobs, self.scheduler = jobs, scheduler
+        self.connect_timeout_s = connect_timeout_s
+        self._client = None
+        if scheduler:
+            # connected now, before the sweep announces itself or creates anything
+            reachable(scheduler, connect_timeout_s)
+            from distributed import Client
+            try:
+                self._client = Client(scheduler, timeout=f"{connect_timeout_s}s")
+            except Exception as exc:                   # noqa: BLE001 -- not a scheduler at that address
+                raise ExecutorUnavailable(f"--scheduler {scheduler}: no Dask scheduler answered there "
+                                          f"({message(exc)})") from None
         self.running = 0
         self.description = (f"on the Dask cluster at {scheduler}" if scheduler else
                             f"on a Dask LocalCluster of {jobs} worker processes")
@@ -167,11 +182,8 @@ class Dask:
         if not tasks:
             return
         cluster = None
-        if self.scheduler:
-            try:
-                client = Client(self.scheduler, timeout="30s")
-            except (OSError, TimeoutError, ValueError) as exc:
-                raise ExecutorUnavailable(f"cannot reach the Dask scheduler at {self.scheduler}: {message(exc)}") from None
+        if self._client is not None:
+            client = self._client
         else:
             cluster = LocalCluster(n_workers=self.jobs, threads_per_worker=1, processes=True,
                                    dashboard_address=None, silence_logs=logging.ERROR)
@@ -200,7 +212,29 @@ class Dask:
                 cluster.close()
 
 
-def make_executor(jobs: int, dask: bool = False, scheduler: Optional[str] = None):
+def reachable(address: str, timeout_s: float) -> None:
+    """Refuse a scheduler address that does not answer a TCP connection within ``timeout_s``,
+    before the sweep announces itself or creates anything (Dask's own connect timeout is 30 s)."""
+    import socket
+    from urllib.parse import urlsplit
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host, port = None, None
+    if not host or not port:
+        raise ExecutorUnavailable(f"--scheduler {address}: expected an address like tcp://host:8786")
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        reason = "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or type(exc).__name__)
+        raise ExecutorUnavailable(f"--scheduler {address}: cannot connect within {timeout_s:g} s ({reason}); is the "
+                                  f"scheduler running and reachable from here?") from None
+
+
+def make_executor(jobs: int, dask: bool = False, scheduler: Optional[str] = None,
+                  connect_timeout_s: float = CONNECT_TIMEOUT_S):
     if dask or scheduler:
-        return Dask(jobs, scheduler)
+        return Dask(jobs, scheduler, connect_timeout_s)
     return Serial() if jobs == 1 else Pool(jobs)

@@ -40,10 +40,13 @@ from cosim.errors import ScenarioError
 from cosim.kinds import KINDS
 from cosim.results.io import Progress, atomic_write, csv_rows, write_rows
 from cosim.results.plots import pyplot
-from cosim.scenario.schema import k_label, k_values
+from cosim.scenario.schema import folder_name, k_label, k_values
 
 DONE, FAILED = "done.json", "failed.json"
 K_KEY = "k_W_per_K"
+#: the most cases a sweep expands (counted from the axes before anything is expanded): a
+#: hundred thousand cases of even a second each are more than a day on a workstation
+MAX_CASES = 100_000
 #: identity columns of a summary row (besides the grid values)
 ROW_CASE_COLUMNS = ("valves", "k_W_per_K")
 SWEEP_KEYS = ("scenario", "grid", "zip", "set", "k_W_per_K", "name")
@@ -160,7 +163,13 @@ def load_sweep_file(path: Path) -> SweepSpec:
     scenario = data.get("scenario")
     if not isinstance(scenario, str):
         raise ScenarioError(path, [*prefix, "scenario"], "expected the scenario file (relative to this file)")
-    spec = SweepSpec(path.parent / scenario, name=str(data.get("name", path.stem)), source=path,
+    target = path.parent / scenario
+    if not target.is_file():
+        raise ScenarioError(path, [*prefix, "scenario"], f"the scenario file {str(target)!r} does not exist or is not a file")
+    if target.resolve() == path.resolve():
+        raise ScenarioError(path, [*prefix, "scenario"], "names this sweep file itself; expected the scenario it varies")
+    name = folder_name(data.get("name", path.stem), path, [*prefix, "name"])
+    spec = SweepSpec(target, name=name, source=path,
                      where=(".".join([*prefix, "grid"]), ".".join([*prefix, "zip"])))
     for section, target in (("grid", spec.grid), ("zip", spec.zip)):
         value = data.get(section) or {}
@@ -173,7 +182,8 @@ def load_sweep_file(path: Path) -> SweepSpec:
             target[str(key)] = values
     base = data.get("set") or {}
     if isinstance(base, list):                 # ["key=value", ...] as on the command line
-        base = dict(parse_assignment(str(item), path, "set", many=False) for item in base)
+        base = dict(parse_assignment(str(item), path, ".".join([*prefix, f"set[{i}]"]), many=False)
+                    for i, item in enumerate(base))
     if not isinstance(base, dict):
         raise ScenarioError(path, [*prefix, "set"], f"expected a mapping key.path: value, got {type(base).__name__}")
     spec.base = {str(k): v for k, v in base.items()}
@@ -200,8 +210,13 @@ def expand(spec: SweepSpec) -> List[Case]:
     for key, values in spec.grid.items():
         if key in spec.zip:
             raise ScenarioError(file, spec.path(key), "is also a grid key: give it in one of grid and zip")
-        _no_duplicates(values, file, spec.path(key))
+        # k sets are sets: [0, inf] and [inf, 0] run the same cases
+        _no_duplicates([_as_set(v) if key == K_KEY else v for v in values], file, spec.path(key))
     lengths = {k: len(v) for k, v in spec.zip.items()}
+    count = math.prod([len(v) for v in spec.grid.values()] + [max(lengths.values(), default=1)])
+    if count > MAX_CASES:
+        axes = " x ".join([str(len(v)) for v in spec.grid.values()] + ([str(max(lengths.values()))] if lengths else []))
+        raise ScenarioError(file, [gw], f"{axes} = {count} cases, more than a sweep takes ({MAX_CASES}); split it")
     if len(set(lengths.values())) > 1:
         raise ScenarioError(file, [zw], "the zip keys vary together and need lists of equal length, got "
                                         + ", ".join(f"{k}: {n}" for k, n in lengths.items()))
@@ -226,6 +241,14 @@ def expand(spec: SweepSpec) -> List[Case]:
                 overrides.append((key, value))
         cases.append(Case(index, values, tuple(overrides), k))
     return cases
+
+
+def _as_set(value):
+    """A k list as the set it stands for (order and repetition do not change the cases)."""
+    try:
+        return tuple(sorted(set(value))) if isinstance(value, list) else value
+    except TypeError:                        # not numbers: k_values says what is wrong
+        return value
 
 
 def _no_duplicates(values, file, path) -> None:
@@ -635,20 +658,31 @@ def write_netcdf(outcome: SweepOutcome) -> List[str]:
                 ds[name] = ds[name].fillna("").astype(str)
         ds.attrs.update({"scenario": str(spec.scenario_file), "scenario_sha256": outcome.prepared.base.content_sha256,
                          "source": "pneumorail sweep"})
-        ds.to_netcdf(outcome.out / "sweep.nc", engine=_netcdf_engine())
+        data = _netcdf_bytes(ds)
     except Exception as exc:                # noqa: BLE001 -- the CSV holds everything; say why
         return [f"sweep.nc skipped: {type(exc).__name__}: {exc}"]
+    # the file written from memory by Python, through a temporary file renamed over the old one:
+    # a full disk is an OSError naming sweep.nc (the previous one, or none, stays), never a
+    # half-written file, and never the netCDF library failing (once a segfault) while closing it
+    try:
+        with atomic_write(outcome.out / "sweep.nc", "wb") as fh:
+            fh.write(data)
+    except OSError as exc:
+        return [f"sweep.nc not written: {exc.strerror} ({exc.filename}); sweep.csv holds the same numbers"]
     return []
 
 
-def _netcdf_engine() -> Optional[str]:
-    for module, engine in (("h5netcdf", "h5netcdf"), ("netCDF4", "netcdf4")):
-        try:
-            __import__(module)
-            return engine
-        except ImportError:
-            continue
-    return "scipy"                          # netCDF3 through scipy (always installed)
+def _netcdf_bytes(ds) -> bytes:
+    """The Dataset as the bytes of a netCDF file, built in memory (netCDF4/HDF5 through h5netcdf
+    where it is installed, else netCDF3 through scipy)."""
+    import io
+    try:
+        import h5netcdf  # noqa: F401 -- writes netCDF4 into a buffer
+    except ImportError:
+        return bytes(ds.to_netcdf(engine="scipy"))
+    buffer = io.BytesIO()
+    ds.to_netcdf(buffer, engine="h5netcdf")
+    return buffer.getvalue()
 
 
 def write_plots(outcome: SweepOutcome) -> List[str]:

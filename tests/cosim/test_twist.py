@@ -138,6 +138,21 @@ def test_check_exit_codes(tmp_path, capsys):
     assert (tmp_path / "cmp" / "compare_Q.png").exists() and (tmp_path / "cmp" / "compare_dqq.png").exists()
     # a folder that is not a run is bad input
     assert cli.main(["compare", str(tmp_path), "--out", str(tmp_path / "cmp2")]) == cli.EXIT_BAD_INPUT
+    # a run that did not finish is refused, naming why, unless it is allowed and marked
+    import shutil
+    cut = tmp_path / "cut"
+    shutil.copytree(out, cut)
+    (cut / "INCOMPLETE").write_text("interrupted\n")
+    capsys.readouterr()
+    assert cli.main(["compare", str(out), str(cut), "--out", str(tmp_path / "cmp3")]) == cli.EXIT_BAD_INPUT
+    assert "INCOMPLETE marker" in capsys.readouterr().err
+    assert cli.main(["compare", str(out), str(cut), "--out", str(tmp_path / "cmp3"), "--allow-incomplete"]) == cli.EXIT_OK
+    # a run.json cut short (a full disk) names the file instead of a JSON traceback
+    (cut / "INCOMPLETE").unlink()
+    (cut / "run.json").write_text((out / "run.json").read_text()[:200])
+    assert cli.main(["compare", str(cut), "--out", str(tmp_path / "cmp4")]) == cli.EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert str(cut / "run.json") in err and "did not finish writing it" in err
 
 
 class _StandingCar:

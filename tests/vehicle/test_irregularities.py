@@ -331,6 +331,16 @@ def test_bad_files_say_where_and_what(tmp_path, name):
     assert str(path) in str(err.value)
 
 
+@pytest.mark.parametrize("content", ["s_m,lateral_m\n0,0\n1,0.001\n".encode("utf-16"), bytes(range(256)) * 4],
+                         ids=["utf-16 from a spreadsheet", "binary"])
+def test_a_file_that_is_not_utf8_text_is_named(tmp_path, content):
+    path = tmp_path / "track.csv"
+    path.write_bytes(content)
+    with pytest.raises(ValueError, match="not a UTF-8 text CSV") as err:
+        TrackIrregularity.from_file(path)
+    assert str(path) in str(err.value)
+
+
 def test_unit_limit_can_be_raised(tmp_path):
     path = tmp_path / "poor.csv"
     path.write_text("s_m,lateral_m\n0,0\n100,0.14\n")
