@@ -39,6 +39,9 @@ from vehicle.track import TRANSITION_SHAPES, TrackGeometry
 MAX_CANT_RAD = 0.2
 #: Highest running speed [m/s]: 100 m/s = 360 km/h, beyond any metro and the wheel-rail model.
 MAX_SPEED_M_PER_S = 100.0
+#: Longest track [m]: the car tabulates it every 0.1 m (vehicle.guidance.TrackSampler), ~100 bytes
+#: per point; 200 km is 2e6 points, 5 minutes at 100 m/s is 30 km
+MAX_TRACK_LENGTH_M = 2.0e5
 #: wheelset guidance of a curve run (vehicle.car.MetroCar ``guidance``)
 GUIDANCE = ("kinematic", "contact")
 #: checkable metrics of the lateral wheel-rail forces: they need ``curve.guidance: contact``
@@ -201,6 +204,13 @@ def parse(data, vehicle: VehicleParams, path: Path) -> CurveTest:
         raise ScenarioError(path, ["curve", "duration_s"], f"the front wheelset leaves the track at t = {on_track:.3g} s; "
                                                            f"lengthen arc_m or shorten duration_s (got {curve.duration_s:g} s)")
     _check_contact(curve, path)
+    length = curve.straight_m + curve.transition_m + curve.arc_m
+    if length > MAX_TRACK_LENGTH_M:
+        longest = max(("straight_m", "transition_m", "arc_m"), key=lambda k: getattr(curve, k))
+        raise ScenarioError(path, ["curve", longest], f"a track of {length:.3g} m: the car tabulates its track every "
+                                                      f"0.1 m, and more than {MAX_TRACK_LENGTH_M / 1e3:g} km would not "
+                                                      f"fit in memory (a {duration_s(curve):g} s run covers "
+                                                      f"{curve.speed_m_per_s * curve.duration_s:.3g} m)")
     try:
         curve.track()
     except ValueError as exc:

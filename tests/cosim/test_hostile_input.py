@@ -253,8 +253,10 @@ KEYS = {  # messages that must name the key the user wrote
                                       {"curve.irregularity.ds_m": 1e-7}),
     "irregularity to 1e9 m wavelengths": Case("irregular", "curve.irregularity.wavelength_range_m", "about 768 GB",
                                               {"curve.irregularity.wavelength_range_m": [3.0, 1e9]}),
-    "irregular straight of 4e8 m": Case("irregular", "curve.irregularity", "the track's 4e+08 m",
+    "irregular straight of 4e8 m": Case("irregular", "curve.straight_m", "more than 200 km would not fit",
                                         {"curve.straight_m": 4e8}),
+    "irregularity over 150 km": Case("irregular", "curve.irregularity.ds_m", "the track's 150022 m",
+                                     {"curve.straight_m": 1.5e5, "curve.irregularity.ds_m": 0.01}),
     # one meaning for null: "none" (tank, differential_valve, cross_pipe); where none cannot be
     # meant it is refused instead of read as the defaults
     "null levelling valve": Case("twist", "circuit.levelling_valve", "write {} for the defaults",
@@ -280,6 +282,8 @@ KEYS = {  # messages that must name the key the user wrote
                                        "circuit.bellow.area_table_m2": [0.12, 0.13, 0.14]}),
     "primary stiffness in kN/m": Case("twist", "vehicle.primary_stiffness_z_N_per_m", "kN/m? (680 kN/m = 680000 N/m)",
                                       {"vehicle": {"preset": "paper_metro_car", "primary_stiffness_z_N_per_m": 680}}),
+    "straight of 4e8 m": Case("curve", "curve.straight_m", "more than 200 km would not fit in memory",
+                              {"curve.straight_m": 4e8}),
     "zero blow-off velocity": Case("twist", "vehicle.secondary_vertical_damper_blowoff_velocity_m_per_s", "> 0 m/s,",
                                    {"vehicle": {"preset": "metro_car_arb_dampers",
                                                 "secondary_vertical_damper_blowoff_velocity_m_per_s": 0.0}}),
