@@ -45,7 +45,7 @@ MAX_TRACK_LENGTH_M = 2.0e5
 #: wheelset guidance of a curve run (vehicle.car.MetroCar ``guidance``)
 GUIDANCE = ("kinematic", "contact")
 #: checkable metrics of the lateral wheel-rail forces: they need ``curve.guidance: contact``
-CONTACT_METRICS = ("yq_max", "sum_y_max", "yq_2m_p9985", "sum_y_2m_p9985", "Y_2m_p50")
+CONTACT_METRICS = ("yq_max", "sum_y_max", "yq_2m_p9985", "sum_y_2m_p9985", "Y_2m_p50", "sum_y_rms_max")
 
 
 
@@ -471,6 +471,8 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
             case, s_centre, curve.track(), scenario.vehicle, nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction),
             prudhomme_limit_N(float(case["Q0_N"].min()), curve.prudhomme_alpha))
         row.update(en14363.summary_columns(found))
+        row.update(en14363.stability_columns(case, curve.speed_m_per_s,
+                                             prudhomme_limit_N(float(case["Q0_N"].min()), curve.prudhomme_alpha)))
         row.update(comfort_columns(case))
         rows.append(row)
         cases.append(case_metrics(row, en14363.zone_metrics(found, stats)))
@@ -519,6 +521,8 @@ def case_metrics(row: Dict[str, object], zoned: Dict[str, Dict[str, Dict[str, fl
     assessment's per zone and wheel (``zoned``, :func:`cosim.kinds.en14363.zone_metrics`)."""
     values = {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}
     wheels = {m: {w: row[f"{m}_{w}"] for w in WHEELS} for m in ("dqq_raw_max", "dqq_2m_max")}
+    if "sum_y_rms_max_N" in row:
+        values["sum_y_rms_max"] = row["sum_y_rms_max_N"]
     if "yq_max" in row:
         values["sum_y_max"] = row["sum_y_max_N"]
         wheels["yq_max"] = {w: row[f"yq_max_{w}"] for w in WHEELS}
@@ -749,7 +753,7 @@ def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List
 
 KIND = Kind("curve_entry", "curve", CurveTest, __name__, car=True,
             check_metrics=("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "yq_max", "sum_y_max", "dqq_raw_max",
-                           "dqq_2m_max", *en14363.METRICS),
+                           "dqq_2m_max", "sum_y_rms_max", *en14363.METRICS),
             wheel_metrics=("dqq_raw_max", "yq_max", "dqq_2m_max",
                            *(m for m, (q, _, _) in en14363.METRICS.items() if en14363.QUANTITIES.get(q, ("", ""))[1] == "wheel")),
             zone_metrics=tuple(en14363.METRICS),

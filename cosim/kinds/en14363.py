@@ -11,12 +11,16 @@ import numpy as np
 import xarray as xr
 
 from cosim.limits.assessment import (
+    STABILITY_AY_LIMIT,
+    STABILITY_WINDOW_M,
     STATISTICS,
     ZONES,
     Limit,
     acceleration_statistics,
     band_filtered,
+    dominant_frequency,
     limits,
+    stability_rms,
     track_means,
     zone_name,
     zone_of,
@@ -199,4 +203,36 @@ def zone_metrics(found: Sequence[Limit], stats) -> Dict[str, Dict[str, Dict[str,
             s = stats[quantity][zone]
             values = np.maximum(s["p9985"], -s["p0015"]) if quantity == "sum_y" else s[stat]
             out[metric][zone] = {label: float(v) for label, v in zip(s["who"], values)}
+    return out
+
+
+def stability_columns(case: xr.Dataset, speed_m_per_s: float, sum_y_lim_N: float) -> Dict[str, float]:
+    """The running-stability criterion's columns of one contact case (:mod:`cosim.limits.assessment`,
+    "Running stability"): ``f0_Hz`` (the peak of the leading wheelset's ΣY spectrum),
+    ``sum_y_rms_max_<wheelset>_N`` and ``sum_y_rms_max_N`` (ΣY at f0 ± 2 Hz, largest rms over a
+    sliding 100 m), ``sum_y_rms_lim_N`` (half Prud'homme's limit), ``ay_stability_rms_max_m_per_s2``
+    (the carbody's lateral floor acceleration above the bogies, the same way) and its limit. Empty
+    without contact, for a run shorter than 100 m, or a case that stopped (NaN)."""
+    if "wheelset_lateral_force_N" not in case:
+        return {}
+    t = case["time"].values
+    window = STABILITY_WINDOW_M / speed_m_per_s
+    if t.size < 2 or t[-1] - t[0] < window:
+        return {}
+    sum_y = case["wheelset_lateral_force_N"].transpose("time", "wheelset").values
+    if not np.isfinite(sum_y).all():
+        return {"sum_y_rms_max_N": math.nan}
+    f0 = dominant_frequency(t, sum_y[:, 0])
+    if not math.isfinite(f0):
+        return {}
+    try:
+        rms = stability_rms(t, sum_y, f0, window)
+    except ValueError:                      # output too coarse for the band: the run warns
+        return {}
+    out = {"f0_Hz": f0, **{f"sum_y_rms_max_{ws}_N": float(v) for ws, v in zip(WHEELSETS, rms)},
+           "sum_y_rms_max_N": float(rms.max()), "sum_y_rms_lim_N": 0.5 * sum_y_lim_N}
+    if "floor_ay_m_per_s2" in case:
+        ay = case["floor_ay_m_per_s2"].sel(floor_point=["front", "rear"]).transpose("time", "floor_point").values
+        out["ay_stability_rms_max_m_per_s2"] = float(stability_rms(t, ay, f0, window).max())
+        out["ay_stability_rms_lim_m_per_s2"] = STABILITY_AY_LIMIT
     return out

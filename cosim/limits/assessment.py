@@ -26,6 +26,12 @@ marked as such; a user bound by the standard checks them against their copy):
   and Q_qst <= 145 kN in the curve zones R < 600 m [assumed: the quasi-static guiding and
   vertical force limits]; (ΔQ/Q0)_2m,99.85 <= 0.6, the twist-test unloading limit used as a
   running indicator (EN 14363 has no such limit on track; marked ``indicator``).
+* **Running stability** (:func:`sliding_rms`, :func:`dominant_frequency`): ΣY band-pass filtered
+  at f0 ± 2 Hz, its rms over a sliding 100 m of track, against half Prud'homme's limit; f0 the
+  peak of ΣY's spectrum between 0.5 and 15 Hz (the hunting frequency when the car hunts, the
+  dominant lateral frequency otherwise) [the criterion as the issue states it; the standard's
+  text was not available]. The carbody's lateral floor acceleration above the bogies in the same
+  band and window, against 0.5 m/s² [assumed].
 * **Carbody accelerations** (:func:`band_filtered`, :func:`acceleration_statistics`): the lateral
   and vertical floor accelerations above the bogie centres, band-pass filtered 0.4-10 Hz (a
   4th-order Butterworth run forwards and backwards: no phase shift), per zone their largest
@@ -171,6 +177,49 @@ def acceleration_statistics(filtered: np.ndarray, zones: np.ndarray) -> Dict[str
             out[zone] = {"max": np.abs(inside).max(axis=0), "rms": np.sqrt((inside ** 2).mean(axis=0)),
                          "n": np.full(inside.shape[1:], inside.shape[0])}
     return out
+
+
+#: running stability: the sliding window [m], the half-width of the band around f0 [Hz], where f0
+#: is looked for [Hz], and the carbody's lateral acceleration limit in that band [m/s^2] (assumed)
+STABILITY_WINDOW_M = 100.0
+STABILITY_HALF_BAND_HZ = 2.0
+STABILITY_SEARCH_HZ = (0.5, 15.0)
+STABILITY_AY_LIMIT = 0.5
+
+
+def sliding_rms(t_s: np.ndarray, values: np.ndarray, window_s: float) -> np.ndarray:
+    """rms of ``values`` (uniform samples first, any trailing shape) over the trailing
+    ``window_s`` at every sample with a whole window behind it (NaN before)."""
+    v = np.asarray(values, dtype=float)
+    dt = float(np.median(np.diff(t_s)))
+    n = int(round(window_s / dt))
+    out = np.full(v.shape, np.nan)
+    if n < 1 or n > v.shape[0]:
+        return out
+    cum = np.concatenate([np.zeros((1,) + v.shape[1:]), np.cumsum(v * v, axis=0)])
+    out[n - 1:] = np.sqrt(np.maximum(cum[n:] - cum[:-n], 0.0) / n)
+    return out
+
+
+def dominant_frequency(t_s: np.ndarray, values: np.ndarray, band_hz=STABILITY_SEARCH_HZ) -> float:
+    """The frequency [Hz] of the largest peak of the (Welch) spectrum of ``values`` (1-D, uniform
+    samples) within ``band_hz``; NaN when the record holds no such frequency."""
+    from scipy.signal import welch
+    v = np.asarray(values, dtype=float)
+    if v.size < 16 or not np.isfinite(v).all():
+        return math.nan
+    fs = 1.0 / float(np.median(np.diff(t_s)))
+    f, p = welch(v - v.mean(), fs=fs, nperseg=min(v.size, int(round(8 * fs))))
+    inside = (f >= band_hz[0]) & (f <= min(band_hz[1], 0.4 * fs))
+    return float(f[inside][np.argmax(p[inside])]) if inside.any() else math.nan
+
+
+def stability_rms(t_s: np.ndarray, values: np.ndarray, f0_Hz: float, window_s: float) -> np.ndarray:
+    """``values`` band-passed at f0 ± 2 Hz (zero phase), their largest sliding rms over
+    ``window_s`` per column (samples first): the stability criterion's quantity."""
+    lo = max(f0_Hz - STABILITY_HALF_BAND_HZ, 0.2)
+    filtered = band_filtered(t_s, values, (lo, f0_Hz + STABILITY_HALF_BAND_HZ))
+    return np.nanmax(sliding_rms(t_s, filtered, window_s), axis=0)
 
 
 @dataclass(frozen=True)

@@ -163,6 +163,8 @@ def test_the_processed_unloading_holds_where_the_raw_peak_moves_with_the_step(tm
         return (max(values) - min(values)) / max(values)
     assert spread("dqq_raw_max") > 0.1
     assert spread("dqq_2m_p9985") < 1e-4 and spread("Q_2m_p9985_N") < 1e-4
+    # 105 m of track: the stability criterion is there, far from half Prud'homme's limit
+    assert 0.0 < float(rows[0]["sum_y_rms_max_N"]) < float(rows[0]["sum_y_rms_lim_N"])
 
 
 # ------------------------------------------------------------------------------ carbody accelerations
@@ -212,3 +214,25 @@ def test_the_floor_feels_the_uncompensated_acceleration_in_a_steady_arc(tmp_path
     lateral, vertical = xr.DataArray(a_c * np.cos(phi) + g * np.sin(phi)), xr.DataArray(g * np.cos(phi) - a_c * np.sin(phi))
     assert float(centre["floor_ay_m_per_s2"].mean()) == pytest.approx(float(lateral.mean()), rel=0.01)
     assert float(centre["floor_az_m_per_s2"].mean()) == pytest.approx(float(vertical.mean()), rel=1e-3)
+
+
+# ------------------------------------------------------------------------------ running stability
+def test_the_sliding_rms_of_a_sine_over_whole_periods():
+    from cosim.limits.assessment import sliding_rms
+    t = np.arange(0.0, 20.0, 0.002)
+    rms = sliding_rms(t, 3.0 * np.sin(2 * math.pi * 2.5 * t), 4.0)      # 10 whole periods per window
+    assert np.isnan(rms[:1999]).all() and np.allclose(rms[1999:], 3.0 / math.sqrt(2), rtol=1e-9)
+
+
+def test_the_stability_quantity_finds_the_hunting_frequency_and_its_rms():
+    # a 5 Hz oscillation of 2 kN (the "hunting") over a 1.3 Hz one of 0.5 kN and noise: f0 is the
+    # larger peak (Welch, 8 s segments: 0.125 Hz resolution), and the f0 +- 2 Hz band passes the
+    # 2 kN sine (rms 1.414 kN within 2 %: the zero-phase band-pass's gain at its centre is 1; the
+    # 1.3 Hz component, 1.7 Hz below the band's lower edge, is mostly cut)
+    from cosim.limits.assessment import dominant_frequency, stability_rms
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 40.0, 0.005)
+    x = 2e3 * np.sin(2 * math.pi * 5.0 * t) + 0.5e3 * np.sin(2 * math.pi * 1.3 * t) + 50 * rng.standard_normal(t.size)
+    f0 = dominant_frequency(t, x)
+    assert f0 == pytest.approx(5.0, abs=0.125)
+    assert stability_rms(t, x[:, None], f0, 10.0)[0] == pytest.approx(2e3 / math.sqrt(2), rel=0.02)

@@ -150,7 +150,7 @@ def test_kinematic_run_has_no_wheel_rail_columns(tmp_path):
 
 # ------------------------------------------------------------------------------ checks
 @pytest.mark.parametrize("check", ["yq_max <= 1.2", "sum_y_max <= 30000", "yq_max[1R] <= 1.2",
-                                   "yq_2m_p9985[zone=R<250] <= 1.2", "Y_2m_p50 <= 1e5"])
+                                   "yq_2m_p9985[zone=R<250] <= 1.2", "Y_2m_p50 <= 1e5", "sum_y_rms_max <= 1e4"])
 def test_kinematic_scenario_refuses_lateral_force_checks(tmp_path, check):
     data = yaml.safe_load((SCENARIOS / "curve_entry.yaml").read_text())
     data["checks"] = ["roll_max_rad <= 0.1", check]
