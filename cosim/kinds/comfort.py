@@ -1,5 +1,6 @@
 """Ride comfort of a car run (:mod:`cosim.limits.comfort` computes the indices): per case and
-floor point N_MV, Sperling's Wz across and up, from the floor accelerations every car run samples.
+floor point N_MV, Sperling's Wz and the largest continuous comfort Cc across and up, from the floor
+accelerations every car run samples.
 Shared by the car kinds that run along a track."""
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from cosim.limits.comfort import BLOCK_S, comfort
 from vehicle.params import FLOOR_POINTS
 
 #: summary columns per floor point (``{}``: the point)
-COLUMNS = ("N_MV_{}", "Wz_y_{}", "Wz_z_{}")
+COLUMNS = ("N_MV_{}", "Wz_y_{}", "Wz_z_{}", "Cc_y_max_{}_m_per_s2", "Cc_z_max_{}_m_per_s2")
 
 
 def comfort_columns(case: xr.Dataset, t_from_s: float = -float("inf")) -> Dict[str, float]:
@@ -32,5 +33,7 @@ def comfort_columns(case: xr.Dataset, t_from_s: float = -float("inf")) -> Dict[s
             out.update({c.format(point): float("nan") for c in COLUMNS})
             continue
         result = comfort(t, axes)
-        out.update({f"N_MV_{point}": result.N_MV, f"Wz_y_{point}": result.Wz["y"], f"Wz_z_{point}": result.Wz["z"]})
+        out.update({f"N_MV_{point}": result.N_MV, f"Wz_y_{point}": result.Wz["y"], f"Wz_z_{point}": result.Wz["z"],
+                    f"Cc_y_max_{point}_m_per_s2": result.Cc_max_m_per_s2["y"],
+                    f"Cc_z_max_{point}_m_per_s2": result.Cc_max_m_per_s2["z"]})
     return out

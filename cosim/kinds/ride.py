@@ -160,8 +160,8 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     metrics = {m: largest(r.get(m, np.nan) for r in rows) for m in KIND.headline_metrics} if rows else {}
     for r in rows:
         cases.append(CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, np.nan) for m in KIND.check_metrics}))
-    shown = ("speed_m_per_s", "valves", "k_W_per_K", *(c.format(p) for c in COLUMNS for p in FLOOR_POINTS),
-             "roll_max_rad", "air_injected_kg")
+    shown = ("speed_m_per_s", "valves", "k_W_per_K", *(f"N_MV_{p}" for p in FLOOR_POINTS), "Wz_y_centre", "Wz_z_centre",
+             "Cc_y_max_centre_m_per_s2", "Cc_z_max_centre_m_per_s2", "roll_max_rad", "air_injected_kg")
     info = {"record_s": ride.record_s, "speeds_m_per_s": list(ride.speeds_m_per_s),
             "irregularity": None if ride.irregularity is None else ride.irregularity.psd or ride.irregularity.file}
     warnings = []
@@ -239,5 +239,6 @@ def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List
 KIND = Kind("ride", "ride", RideTest, __name__, car=True,
             check_metrics=tuple(c.format(p) for c in COLUMNS for p in FLOOR_POINTS),
             # the comfort indices over the record; roll and air as in a curve run
-            headline_metrics=(*(c.format(p) for c in COLUMNS for p in FLOOR_POINTS), "roll_max_rad", "air_injected_kg"),
+            # the indices over the record; the Cc maxima are in the summary and checkable
+            headline_metrics=(*(c.format(p) for c in COLUMNS[:3] for p in FLOOR_POINTS), "roll_max_rad", "air_injected_kg"),
             plot_metrics=("N_MV_centre", "Wz_y_centre", "Wz_z_centre"))

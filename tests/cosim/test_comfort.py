@@ -145,6 +145,7 @@ def test_a_car_run_reports_the_comfort_of_each_floor_point():
         direct = comfort(t, {a: case[f"floor_a{a}_m_per_s2"].values[:, i] for a in "xyz"})
         assert columns[f"N_MV_{point}"] == pytest.approx(direct.N_MV, rel=1e-12)
         assert columns[f"Wz_z_{point}"] == pytest.approx(direct.Wz["z"], rel=1e-12)
+        assert columns[f"Cc_y_max_{point}_m_per_s2"] == pytest.approx(direct.Cc_max_m_per_s2["y"], rel=1e-12)
     assert columns["N_MV_rear"] == pytest.approx(4 * columns["N_MV_centre"], rel=1e-9)     # linear in the amplitude
     assert comfort_columns(case.isel(time=slice(0, 500))) == {}                            # 2.5 s: not one block
 
