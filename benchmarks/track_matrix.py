@@ -18,7 +18,9 @@ per case:
 * ΣY against the balance (contact guidance): the mean over the last 6 s of the four wheelsets'
   lateral forces minus M (v²/R cos c - g sin c), in % of the larger of M v²/R and M g sin c
   (six periods of the ~1 Hz carbody sway, which nothing damps with the valves off at k = inf);
-* ΔQ/Q0: the largest EN 14363 2 m sliding mean over the run (and the sampled peak);
+* ΔQ/Q0: the largest EN 14363 2 m sliding mean over the run (and the sampled peak), its 99.85 %
+  percentile over the worst test zone, the number of EN 14363 criteria the case fails and the
+  zones it crossed (cosim/limits/assessment.py);
 * with ``--verify``: the largest estimated error of the case's headline metrics
   (``pneumorail verify``'s Richardson estimates, floors and all) and whether it passes 0.5 %.
 
@@ -97,7 +99,9 @@ def one(args) -> dict:
     out = {"key": key, "wall_s": time.perf_counter() - t0,
            "outcome": ("DIVERGED" if "impossible state" not in outcome.diverged else "stop") if outcome.diverged else "ok",
            "diagnosis": outcome.diverged or "", "balance_pct": balance(outcome),
-           "dqq_2m_max": row["dqq_2m_max"], "dqq_raw_max": row["dqq_raw_max"]}
+           "dqq_2m_max": row["dqq_2m_max"], "dqq_raw_max": row["dqq_raw_max"],
+           "dqq_2m_p9985": row.get("dqq_2m_p9985", float("nan")), "failed": row.get("en14363_failed", -1),
+           "zones": ",".join(outcome.info.get("zones", []))}
     if verify:
         rows = [[outcome.rows[0]]]
         stops = [outcome.diverged]
@@ -109,7 +113,7 @@ def one(args) -> dict:
             out["diagnosis"] = "\n      ".join(f"level {i}: {d or 'ran to its end'}" for i, d in enumerate(stops))
             out["verify"] = ("stops", math.nan)
         else:
-            found = estimates(rows, KINDS[scenario.kind].headline_metrics)
+            found = estimates(rows, KINDS[scenario.kind].headline_metrics, KINDS[scenario.kind].case_columns)
             worst = max(found, key=lambda e: e.error)
             out["verify"] = (worst.metric, worst.error)
     return out
@@ -139,7 +143,8 @@ def main(argv=None) -> int:
             counts[r["outcome"]] += 1
             g, c, v, R, L = r["key"]
             line = (f"{g:9s} {c:6.4g} {v:5.3g} {R:6.4g} {L:5.3g}: {r['outcome']:8s} "
-                    f"{r['balance_pct']:+7.3f} %  {r['dqq_2m_max']:.3f} ({r['dqq_raw_max']:.3f})  {r['wall_s']:5.1f} s")
+                    f"{r['balance_pct']:+7.3f} %  {r['dqq_2m_max']:.3f} ({r['dqq_raw_max']:.3f}) "
+                    f"p99.85 {r['dqq_2m_p9985']:.3f} EN14363 failed {r['failed']} [{r['zones']}]  {r['wall_s']:5.1f} s")
             if args.verify:
                 metric, err = r["verify"]
                 line += (f"  {100 * err:.3f} % ({metric}){'' if err <= 0.005 else '  > 0.5 %'}"

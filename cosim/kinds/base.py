@@ -59,6 +59,9 @@ class Kind:
         The summary columns a sweep plots against its keys.
     k_fixed : str
         Why ``--k`` does not apply, for a kind computed for fixed k values (empty: it applies).
+    case_columns : tuple of str
+        The summary columns that identify a case (a row): what ``verify`` pairs across its levels
+        and ``sweep.nc`` takes as dimensions (those present in the rows).
     """
 
     name: str
@@ -72,6 +75,7 @@ class Kind:
     headline_metrics: Tuple[str, ...] = ()
     plot_metrics: Tuple[str, ...] = ()
     k_fixed: str = ""
+    case_columns: Tuple[str, ...] = ("valves", "k_W_per_K")
 
     @property
     def code(self) -> ModuleType:

@@ -464,15 +464,14 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     ds, diagnoses = simulate(scenario, progress)
     rows, cases, statistics, assessed = [], [], [], []
     s_centre = car_centre_s_m(scenario, ds["time"].values)
+    track, yq_lim = curve.track(), nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction)
     for j in range(ds.sizes["case"]):
         case = ds.isel(case=j)
         row = summary_row(case, curve)
-        stats, found = en14363.assess_case(
-            case, s_centre, curve.track(), scenario.vehicle, nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction),
-            prudhomme_limit_N(float(case["Q0_N"].min()), curve.prudhomme_alpha))
+        sum_y_lim = prudhomme_limit_N(float(case["Q0_N"].min()), curve.prudhomme_alpha)
+        stats, found = en14363.assess_case(case, s_centre, track, scenario.vehicle, yq_lim, sum_y_lim)
         row.update(en14363.summary_columns(found))
-        row.update(en14363.stability_columns(case, curve.speed_m_per_s,
-                                             prudhomme_limit_N(float(case["Q0_N"].min()), curve.prudhomme_alpha)))
+        row.update(en14363.stability_columns(case, curve.speed_m_per_s, sum_y_lim))
         row.update(comfort_columns(case))
         rows.append(row)
         cases.append(case_metrics(row, en14363.zone_metrics(found, stats)))
@@ -487,7 +486,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     shown += ("en14363_failed",)
     info = {"window_s": curve.window, "guidance": curve.guidance}
     info.update(sliding_mean_m=SLIDING_MEAN_M, assessment_step_m=STEP_M,
-                zones=list(en14363.zones_run(curve.track(), scenario.vehicle, s_centre[[0, -1]])))
+                zones=list(en14363.zones_run(track, scenario.vehicle, s_centre[[0, -1]])))
     if curve.contact:
         info.update(yq_lim=rows[0]["yq_lim"] if rows else None, sum_y_lim_N=rows[0]["sum_y_lim_N"] if rows else None)
     if curve.irregularity is not None:

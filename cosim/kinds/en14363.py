@@ -83,8 +83,8 @@ def zones_run(track: TrackGeometry, vehicle: VehicleParams, s_centre_m: Sequence
     starts, zones, _ = zone_table(track)
     lo = min(s_centre_m) + min(vehicle.wheelset_x_m)
     hi = max(s_centre_m) + max(vehicle.wheelset_x_m)
-    present = set(zone_of(starts, zones, np.linspace(lo, hi, 2001)))
-    return tuple(z for z in dict.fromkeys(zones) if z in present)
+    ends = [*starts[1:], track.total_length_m]
+    return tuple(dict.fromkeys(z for z, a, b in zip(zones, starts, ends) if a < hi and b > lo))
 
 
 def assess_case(case: xr.Dataset, s_centre_m: np.ndarray, track: TrackGeometry, vehicle: VehicleParams,
@@ -118,6 +118,8 @@ def _accelerations(case: xr.Dataset, s_centre_m: np.ndarray, vehicle: VehiclePar
     band: the run warns)."""
     out = {}
     t = case["time"].values
+    if acceleration_warning(t):
+        return out
     for quantity, axis in (("ay_floor", "y"), ("az_floor", "z")):
         name = f"floor_a{axis}_m_per_s2"
         if name not in case:

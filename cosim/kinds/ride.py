@@ -241,4 +241,6 @@ KIND = Kind("ride", "ride", RideTest, __name__, car=True,
             # the comfort indices over the record; roll and air as in a curve run
             # the indices over the record; the Cc maxima are in the summary and checkable
             headline_metrics=(*(c.format(p) for c in COLUMNS[:3] for p in FLOOR_POINTS), "roll_max_rad", "air_injected_kg"),
-            plot_metrics=("N_MV_centre", "Wz_y_centre", "Wz_z_centre"))
+            plot_metrics=("N_MV_centre", "Wz_y_centre", "Wz_z_centre"),
+            # a case is a speed as well as a k value and valve setting
+            case_columns=("speed_m_per_s", "valves", "k_W_per_K"))

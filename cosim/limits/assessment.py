@@ -47,6 +47,8 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
+from cosim.limits.criteria import cumulative_at
+
 #: EN 14363's sliding window [m] and the step it is moved by along the track [m]
 WINDOW_M = 2.0
 STEP_M = 0.5
@@ -62,22 +64,6 @@ DQQ_INDICATOR = 0.6
 #: carbody accelerations: the filter band [Hz] and the limits [m/s^2] (assumed)
 ACCELERATION_BAND_HZ = (0.4, 10.0)
 ACCELERATION_LIMITS = {"ay_floor": {"max": 3.0, "rms": 0.5}, "az_floor": {"max": 5.0, "rms": 1.0}}
-
-
-def cumulative_at(x: np.ndarray, values: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """∫_{x_0}^{p} v dx for every p in ``points`` (within [x_0, x_-1]) of the samples ``values``
-    (samples first, any trailing shape) joined linearly: exact for that piecewise-linear signal.
-    NaN samples make every integral that reaches them NaN."""
-    x = np.asarray(x, dtype=float)
-    v = np.asarray(values, dtype=float)
-    p = np.asarray(points, dtype=float)
-    shape = (-1,) + (1,) * (v.ndim - 1)
-    h = np.diff(x).reshape(shape)
-    cum = np.concatenate([np.zeros((1,) + v.shape[1:]), np.cumsum(0.5 * (v[1:] + v[:-1]) * h, axis=0)])
-    j = np.clip(np.searchsorted(x, p, side="right"), 1, x.size - 1)
-    d = (p - x[j - 1]).reshape(shape)
-    hj = (x[j] - x[j - 1]).reshape(shape)
-    return cum[j - 1] + v[j - 1] * d + (v[j] - v[j - 1]) * d * d / (2.0 * hj)
 
 
 def window_means(x: np.ndarray, values: np.ndarray, ends: np.ndarray, width: float) -> np.ndarray:
@@ -152,12 +138,12 @@ def zone_statistics(means: np.ndarray, zones: np.ndarray) -> Dict[str, Dict[str,
 def band_filtered(t_s: np.ndarray, values: np.ndarray, band_hz=ACCELERATION_BAND_HZ, order: int = 4) -> np.ndarray:
     """``values`` (samples first, uniformly sampled at ``t_s``) band-pass filtered forwards and
     backwards (zero phase) by a Butterworth filter of ``order`` on ``band_hz``. Raises
-    ValueError when the sampling is too coarse for the band (the upper edge at or above 0.8 of
-    the Nyquist frequency)."""
+    ValueError when the sampling is too coarse for the band (the upper edge above 0.8 of the
+    Nyquist frequency)."""
     from scipy.signal import butter, sosfiltfilt
     t = np.asarray(t_s, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
-    if band_hz[1] >= 0.4 * fs:
+    if band_hz[1] > 0.4 * fs * (1.0 + 1e-6):             # round-off in the sample times must not flip it
         raise ValueError(f"sampled at {fs:g} Hz: too coarse for a band up to {band_hz[1]:g} Hz "
                          f"(output interval at most {0.4 / band_hz[1]:g} s)")
     sos = butter(order, band_hz, btype="bandpass", fs=fs, output="sos")

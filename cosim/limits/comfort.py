@@ -203,9 +203,10 @@ def comfort(t_s: np.ndarray, accelerations: Dict[str, np.ndarray]) -> ComfortRes
         warnings.append(f"the record lasts {duration:g} s, shorter than the {STANDARD_RECORD_S:g} s EN 12299 "
                         f"evaluates N_MV over: its 95th percentiles rest on {int(duration // BLOCK_S + 1e-9)} blocks")
     out = {"weighted": {}, "blocks": {}, "cc": {}, "P95": {}, "Cc_max": {}, "Wz": {}}
-    grid = None
+    resampled = {axis: uniform(t, accelerations[axis]) for axis in axes}
+    grid = resampled[axes[0]][0]
     for axis in axes:
-        grid, a = uniform(t, accelerations[axis])
+        a = resampled[axis][1]
         aw = weighted(grid, a, "Wb" if axis == "z" else "Wd")
         out["weighted"][axis] = aw
         out["blocks"][axis] = block_rms(grid, aw)
@@ -221,7 +222,7 @@ def comfort(t_s: np.ndarray, accelerations: Dict[str, np.ndarray]) -> ComfortRes
         n_mv = 6.0 * math.sqrt(sum(out["P95"][a] ** 2 for a in AXES))
     a_v = None
     if not missing:
-        iso = [weighted(grid, uniform(t, accelerations[a])[1], "Wk" if a == "z" else "Wd") for a in AXES]
+        iso = [weighted(grid, resampled[a][1], "Wk" if a == "z" else "Wd") for a in AXES]
         a_v = float(math.sqrt(sum(np.mean(w * w) for w in iso)))
     n_blocks = len(next(iter(out["blocks"].values())))
     return ComfortResult(duration, n_mv, out["P95"], out["Cc_max"], out["Wz"], a_v,

@@ -3,6 +3,7 @@ the EN 14363 2 m sliding mean; final-window statistics of time series."""
 from __future__ import annotations
 
 import math
+from typing import Optional
 
 import numpy as np
 
@@ -49,6 +50,31 @@ def prudhomme_limit_N(Q0_N: float, alpha: float = 1.0) -> float:
     return alpha * (10e3 + 2.0 * Q0_N / 3.0)
 
 
+def cumulative_integral(x: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """∫_{x_0}^{x_i} v dx at every sample of ``values`` (samples first) joined linearly: the
+    cumulative trapezoid."""
+    x = np.asarray(x, dtype=float)
+    v = np.asarray(values, dtype=float)
+    h = np.diff(x).reshape((-1,) + (1,) * (v.ndim - 1))
+    return np.concatenate([np.zeros((1,) + v.shape[1:]), np.cumsum(0.5 * (v[1:] + v[:-1]) * h, axis=0)])
+
+
+def cumulative_at(x: np.ndarray, values: np.ndarray, points: np.ndarray, cum: Optional[np.ndarray] = None) -> np.ndarray:
+    """∫_{x_0}^{p} v dx for every p in ``points`` (within [x_0, x_-1]) of the samples ``values``
+    (samples first, any trailing shape) joined linearly: exact for that piecewise-linear signal
+    (``cum``: :func:`cumulative_integral` of them, if at hand). NaN samples make every integral
+    that reaches them NaN."""
+    x = np.asarray(x, dtype=float)
+    v = np.asarray(values, dtype=float)
+    p = np.asarray(points, dtype=float)
+    cum = cumulative_integral(x, v) if cum is None else cum
+    j = np.clip(np.searchsorted(x, p, side="right"), 1, x.size - 1)
+    shape = (-1,) + (1,) * (v.ndim - 1)
+    d = (p - x[j - 1]).reshape(shape)
+    hj = (x[j] - x[j - 1]).reshape(shape)
+    return cum[j - 1] + (v[j - 1] * d + (v[j] - v[j - 1]) * d * d / (2.0 * hj))
+
+
 def sliding_mean(t_s: np.ndarray, values: np.ndarray, window_s: float) -> np.ndarray:
     """Trailing sliding mean over ``window_s``: m(t_i) = (1/W) ∫_{t_i - W}^{t_i} v dt for every
     sample time t_i with a whole window behind it (t_i >= t_0 + W), NaN before. The samples
@@ -65,22 +91,18 @@ def sliding_mean(t_s: np.ndarray, values: np.ndarray, window_s: float) -> np.nda
     out = np.full(v.shape, np.nan)
     if t.size < 2:
         return out
-    h = np.diff(t).reshape((-1,) + (1,) * (v.ndim - 1))
     bad = np.isnan(v)
     v0 = np.where(bad, 0.0, v)
     # integral from t_0 to each sample, and the number of intervals touching a NaN sample
-    cum = np.concatenate([np.zeros((1,) + v.shape[1:]), np.cumsum(0.5 * (v0[1:] + v0[:-1]) * h, axis=0)])
+    cum = cumulative_integral(t, v0)
     bad_cum = np.concatenate([np.zeros((1,) + v.shape[1:], dtype=int), np.cumsum(bad[1:] | bad[:-1], axis=0)])
     full = np.flatnonzero(t >= t[0] + window_s - 1e-12 * max(1.0, abs(t[0])))
     if full.size == 0:
         return out
     start = np.maximum(t[full] - window_s, t[0])
-    # interval [t_{j-1}, t_j] holding each window start; the integral from t_{j-1} to the start
+    mean = (cum[full] - cumulative_at(t, v0, start, cum)) / window_s
+    # the interval holding each window's start, for the NaN count
     j = np.clip(np.searchsorted(t, start, side="right"), 1, t.size - 1)
-    d = (start - t[j - 1]).reshape((-1,) + (1,) * (v.ndim - 1))
-    hj = (t[j] - t[j - 1]).reshape(d.shape)
-    partial = v0[j - 1] * d + (v0[j] - v0[j - 1]) * d * d / (2.0 * hj)
-    mean = (cum[full] - (cum[j - 1] + partial)) / window_s
     out[full] = np.where(bad_cum[full] - bad_cum[j - 1] > 0, np.nan, mean)
     return out
 

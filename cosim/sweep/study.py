@@ -48,7 +48,6 @@ K_KEY = "k_W_per_K"
 #: hundred thousand cases of even a second each are more than a day on a workstation
 MAX_CASES = 100_000
 #: identity columns of a summary row (besides the grid values)
-ROW_CASE_COLUMNS = ("valves", "k_W_per_K")
 SWEEP_KEYS = ("scenario", "grid", "zip", "set", "k_W_per_K", "name")
 
 
@@ -629,7 +628,8 @@ def write_netcdf(outcome: SweepOutcome) -> List[str]:
         return []
     spec = outcome.prepared.spec
     zip_keys = list(spec.zip)
-    dims = [k for k in spec.grid if k != K_KEY] + zip_keys[:1] + [c for c in ROW_CASE_COLUMNS if c in rows[0]]
+    case_columns = KINDS[outcome.prepared.base.kind].case_columns
+    dims = [k for k in spec.grid if k != K_KEY] + zip_keys[:1] + [c for c in case_columns if c in rows[0]]
     frame = pd.DataFrame(rows)
     for col in frame.columns:
         if col in ("case", "status", "diagnosis") or col in spec.grid or col in spec.zip:

@@ -54,7 +54,8 @@ FLOORS = (("_kg", "air_initial_kg", 1e-3), ("_rad", "roll_max_rad", 0.1), ("_N",
 
 #: the steps each level divides by two
 STEPS = ("macro_step_s", "mechanics_step_s", "pneumatic_step_s")
-#: Columns that identify a case in a summary row.
+#: Columns that identify a case in a summary row, unless the kind declares its own
+#: (:attr:`cosim.kinds.base.Kind.case_columns`).
 CASE_COLUMNS = ("valves", "k_W_per_K")
 
 
@@ -114,9 +115,9 @@ def refined(scenario: Scenario, level: int) -> Scenario:
     return dataclasses.replace(scenario, solver=solver)
 
 
-def _case(row: Dict[str, object]) -> str:
+def _case(row: Dict[str, object], columns: Sequence[str] = CASE_COLUMNS) -> str:
     """The case of a summary row as its CSV shows it (``valves=True, k_W_per_K=inf``)."""
-    return ", ".join(f"{c}={cell(row[c])}" for c in CASE_COLUMNS if c in row)
+    return ", ".join(f"{c}={cell(row[c])}" for c in columns if c in row)
 
 
 def _family(metric: str) -> str:
@@ -139,10 +140,18 @@ def floor_of(metric: str, row: Dict[str, str]) -> float:
     return 0.0
 
 
-def estimates(rows_per_level: Sequence[List[Dict[str, str]]], metrics: Sequence[str]) -> List[Estimate]:
-    """Richardson estimates of every metric (present in the rows) of every case."""
-    by_level = [{_case(r): r for r in rows} for rows in rows_per_level]
-    series = [(metric, case, [float(level[case][metric]) if case in level else math.nan for level in by_level],
+def estimates(rows_per_level: Sequence[List[Dict[str, str]]], metrics: Sequence[str],
+              case_columns: Sequence[str] = CASE_COLUMNS) -> List[Estimate]:
+    """Richardson estimates of every metric (present in the rows) of every case (a case: the
+    values of ``case_columns``; two rows of one case would hide each other, so they are refused)."""
+    by_level = []
+    for rows in rows_per_level:
+        level = {_case(r, case_columns): r for r in rows}
+        if len(level) != len(rows):
+            raise ValueError(f"summary rows are not one per ({', '.join(case_columns)})")
+        by_level.append(level)
+    series = [(metric, case, [float(level[case].get(metric, math.nan)) if case in level else math.nan
+                              for level in by_level],
                floor_of(metric, row))
               for metric in metrics for case, row in by_level[0].items() if metric in row]
     # a per-wheel metric is judged on the scale of its family: the largest |estimate| of that
@@ -174,7 +183,8 @@ def verify(scenario: Scenario, out: Path, levels: int, progress: Progress) -> Tu
             diverged.append(f"level {level}: {outcome.diverged}")
         rows.append(outcome.rows)
         steps.append({"level": level, "folder": f"level_{level}", **{k: getattr(s, k) for k in STEPS}})
-    found = estimates(rows, KINDS[scenario.kind].headline_metrics)
+    kind = KINDS[scenario.kind]
+    found = estimates(rows, kind.headline_metrics, kind.case_columns)
     write_rows(out / "verify.csv", [e.row() for e in found])
     info = {"scenario_file": str(scenario.file), "name": scenario.name, "kind": scenario.kind,
             "tolerance": scenario.verify.tolerance, "levels": steps, "diverged": diverged,

@@ -236,3 +236,30 @@ def test_the_stability_quantity_finds_the_hunting_frequency_and_its_rms():
     f0 = dominant_frequency(t, x)
     assert f0 == pytest.approx(5.0, abs=0.125)
     assert stability_rms(t, x[:, None], f0, 10.0)[0] == pytest.approx(2e3 / math.sqrt(2), rel=0.02)
+
+
+@pytest.mark.slow
+def test_a_run_with_coarse_output_is_assessed_without_its_accelerations(tmp_path):
+    # outputs every 50 ms (20 Hz) cannot hold the 0.4-10 Hz band: the run says so and keeps every
+    # other number (it used to stop with a ValueError after the simulation)
+    from cosim.kinds.curve_entry import run
+    from cosim.load import load_scenario
+    from cosim.results.io import Progress
+
+    from helpers import SCENARIOS
+    s = load_scenario(SCENARIOS / "curve_entry_contact.yaml", ["curve.duration_s=4", "curve.valve_settings=[false]",
+                                                               "solver.jobs=1", "solver.output_interval_s=0.05"],
+                      [math.inf])
+    outcome = run(s, Progress("t", quiet=True))
+    row = outcome.rows[0]
+    assert "ay_floor_rms_m_per_s2" not in row and row["yq_2m_p9985"] > 0
+    assert any("carbody accelerations not assessed" in w for w in outcome.warnings)
+
+
+def test_the_band_check_does_not_flip_on_round_off_in_the_sample_times():
+    # 25 Hz samples hold the 0.4-10 Hz band just so (10 Hz = 0.8 of Nyquist); sample times a
+    # hair either side of 0.04 s (as halved steps produce) must be judged alike
+    from cosim.limits.assessment import band_filtered
+    for dt in (0.04 * (1 - 1e-12), 0.04, 0.04 * (1 + 1e-12)):
+        t = np.arange(2000) * dt
+        assert np.isfinite(band_filtered(t, np.sin(2 * math.pi * 2.0 * t))).all()

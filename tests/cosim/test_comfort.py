@@ -189,3 +189,17 @@ def test_a_ride_gives_the_comfort_of_each_speed_over_its_record(tmp_path):
 def test_a_bad_ride_is_refused_before_it_runs(tmp_path, capsys, change, where):
     assert cli.main(["validate", str(_ride(tmp_path, **change))]) == 2
     assert where in capsys.readouterr().err
+
+
+def test_verify_pairs_a_ride_case_by_its_speed():
+    # two speeds with the same k and valves are two cases; pairing by k and valves alone would
+    # let one speed's row hide the other's (it once did) -- now refused
+    from cosim.kinds import KINDS
+    from cosim.verification.verify import estimates
+    levels = [[{"speed_m_per_s": v, "valves": True, "k_W_per_K": 0.0, "N_MV_centre": v / 10 + 0.01 * 2 ** -i}
+               for v in (10.0, 20.0)] for i in range(3)]
+    found = estimates(levels, ("N_MV_centre",), KINDS["ride"].case_columns)
+    assert sorted(e.case for e in found) == ["speed_m_per_s=10, valves=True, k_W_per_K=0",
+                                             "speed_m_per_s=20, valves=True, k_W_per_K=0"]
+    with pytest.raises(ValueError, match="not one per"):
+        estimates(levels, ("N_MV_centre",))
