@@ -42,8 +42,10 @@ cases (e.g. several k values or frequencies) are integrated as one vectorised sy
 """
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass
-from typing import Mapping, NamedTuple, Optional, Sequence
+from typing import Mapping, NamedTuple, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -57,6 +59,7 @@ from .chamber import (
     isothermal_heat_flow_W,
     temperature_rate_K_per_s,
 )
+from .faults import FAULT_KINDS, VALVE_SIDES, Fault, nozzle_conductance
 from .gas import AIR, Gas
 from .orifice import Orifice, orifice_flow_kg_per_s
 from .pipe import Pipe, pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
@@ -85,6 +88,34 @@ COMPONENT_TYPES = {
 
 ATMOSPHERE = "atmosphere"
 PIPE_MODELS = ("dynamic", "quasi_steady")
+
+
+#: fault kind -> (component types it applies to, fields it takes besides kind, component, t_s)
+_FAULT_RULES = {
+    "burst": ((Bellow, Tank, Supply), ("area_m2", "C_m3_per_sPa", "b_critical")),
+    "leak": ((Bellow, Tank, Supply), ("area_m2", "C_m3_per_sPa", "b_critical")),
+    "blocked": ((Pipe, Orifice), ()),
+    "ruptured": ((Pipe,), ("area_m2", "C_m3_per_sPa", "b_critical")),
+    "stuck_closed": ((LevellingValve, DifferentialPressureValve), ()),
+    "stuck_open": ((LevellingValve, DifferentialPressureValve), ("side",)),
+    "stuck_at": ((LevellingValve,), ("lever_m",)),
+    "supply_lost": ((Supply,), ()),
+}
+_TYPE_WORDS = {Bellow: "bellow", Tank: "tank", Supply: "supply", Pipe: "pipe", Orifice: "orifice",
+               LevellingValve: "levelling or safety valve", DifferentialPressureValve: "differential valve"}
+
+
+def _type_word(comp) -> str:
+    return next((w for t, w in _TYPE_WORDS.items() if isinstance(comp, t)), type(comp).__name__)
+
+
+def _without_dead_band(valve: DifferentialPressureValve) -> DifferentialPressureValve:
+    """A differential valve stuck open: its flow table shifted so that it opens at dp = 0, the
+    flow it passed at dp_0 + dp now passing at dp (dp_0: the last table point of zero flow)."""
+    dp, q = np.asarray(valve.dp_Pa, float), np.asarray(valve.q_kg_per_s, float)
+    first = int(np.flatnonzero(q > 0)[0]) - 1 if np.any(q > 0) else len(q) - 1
+    first = max(first, 0)
+    return dataclasses.replace(valve, dp_Pa=tuple(dp[first:] - dp[first]), q_kg_per_s=tuple(q[first:]))
 
 
 class CircuitError(ValueError):
@@ -242,11 +273,21 @@ class Circuit:
     ``k_W_per_K`` is the heat-transfer coefficient of every chamber (eq. 8): 0 is adiabatic,
     ``inf`` the exact isothermal limit (T held at the atmosphere's temperature, the heat flow
     being whatever that takes). An array of k values, one per case, batches cases.
+
+    ``faults`` (:mod:`pneumatics.faults`) are compiled from the start, so that the state vector
+    is the same whether they have happened or not; those in ``active_faults`` (their indices)
+    have happened. :meth:`with_active_faults` gives the same circuit with other faults active.
+    Each opening a fault makes to the atmosphere is a link of its own (``<component>.<kind>``,
+    a ruptured pipe's ``<pipe>.ruptured@<end node>``), shut while the fault is inactive.
     """
 
     def __init__(self, components: Mapping[str, object], *, gas: Gas = AIR,
-                 atmosphere: Atmosphere = Atmosphere(), k_W_per_K=0.0):
+                 atmosphere: Atmosphere = Atmosphere(), k_W_per_K=0.0, faults: Sequence[Fault] = (),
+                 active_faults: Sequence[int] = ()):
         self.components = dict(components)
+        self._given_components = dict(components)
+        self.faults = tuple(faults)
+        self.active_faults = frozenset(int(i) for i in active_faults)
         self.gas = gas
         self.atmosphere = atmosphere
         self.k_W_per_K = np.asarray(k_W_per_K, dtype=float)
@@ -257,7 +298,9 @@ class Circuit:
         self._k_finite = np.where(self._isothermal, 0.0, self.k_W_per_K)
         self._boundary_columns = {}
         self._classify()
+        self._check_faults()
         self._compile_links()
+        self._compile_faults()
 
     # ----------------------------------------------------------------------------- assembly
     def _classify(self) -> None:
@@ -328,6 +371,7 @@ class Circuit:
         valves = [n for n, c in comps.items() if isinstance(c, LevellingValve)]
         dpvs = [n for n, c in comps.items() if isinstance(c, DifferentialPressureValve)]
 
+        openings = self._fault_openings()
         ends, self.link_names = [], []
 
         def add(link_name, comp_name, a_field, a, b_field, b):
@@ -339,7 +383,11 @@ class Circuit:
             ends.append((ia, ib))
             self.link_names.append(link_name)
 
-        for n in pipes + qs_pipes + orifices + dpvs:
+        for n in pipes + qs_pipes + orifices:
+            add(n, n, "a", comps[n].a, "b", comps[n].b)
+        for link, i, node, _, _ in openings:
+            add(link, f"faults[{i}]", "component", node, "b", ATMOSPHERE)
+        for n in dpvs:
             add(n, n, "a", comps[n].a, "b", comps[n].b)
         for n in valves:
             v = comps[n]
@@ -372,13 +420,16 @@ class Circuit:
             else:
                 self._boundary_sign[j] = -1.0
 
-        n_pipe, n_qs, n_or, n_dpv, n_v = len(pipes), len(qs_pipes), len(orifices), len(dpvs), len(valves)
+        n_pipe, n_qs, n_dpv, n_v = len(pipes), len(qs_pipes), len(dpvs), len(valves)
+        n_or = len(orifices) + len(openings)         # fixed orifices, then the faults' openings
         self._sl_pipe = slice(0, n_pipe)
         self._sl_qs = slice(n_pipe, n_pipe + n_qs)
         self._sl_or = slice(n_pipe + n_qs, n_pipe + n_qs + n_or)
         self._sl_dpv = slice(self._sl_or.stop, self._sl_or.stop + n_dpv)
         self._sl_valve = slice(self._sl_dpv.stop, nl)  # supply sides then exhaust sides
-        # links whose flow is an ISO 6358 orifice law: fixed orifices, then valve sides
+        #: the links of the faults' openings to the atmosphere (what :meth:`air_lost_kg` counts)
+        self.fault_links = slice(self._sl_or.start + len(orifices), self._sl_or.stop)
+        # links whose flow is an ISO 6358 orifice law: fixed orifices, fault openings, then valve sides
         self._orifice_links = np.r_[np.arange(self._sl_or.start, self._sl_or.stop),
                                     np.arange(self._sl_valve.start, self._sl_valve.stop)].astype(int)
         # node rows of the links' ends, as slices where evenly spaced (views instead of copies)
@@ -393,11 +444,12 @@ class Circuit:
         self._pipe_K = _column([comps[n].loss_coefficient for n in pipes])
         self._qs_A = _column([comps[n].area_m2 for n in qs_pipes])
         self._qs_K = _column([comps[n].loss_coefficient for n in qs_pipes])
-        self._or_C = _column([comps[n].C_m3_per_sPa for n in orifices])
+        self._or_C = _column([comps[n].C_m3_per_sPa for n in orifices] +
+                             [C if i in self.active_faults else 0.0 for _, i, _, C, _ in openings])
         self._n_orifices = n_or
         self._dpv = [comps[n] for n in dpvs]
         self._valves = [comps[n] for n in valves]
-        self._b_crit = _column([comps[n].b_critical for n in orifices] +
+        self._b_crit = _column([comps[n].b_critical for n in orifices] + [b for *_, b in openings] +
                                [comps[n].b_critical for n in valves] * 2)
         self._supply_tables = _table_groups([(v.supply_lever_m, v.supply_C_m3_per_sPa) for v in self._valves])
         self._exhaust_tables = _table_groups([(v.exhaust_lever_m, v.exhaust_C_m3_per_sPa) for v in self._valves])
@@ -411,6 +463,116 @@ class Circuit:
             for s in sensed:
                 self._lever[i, self._bellow_index(n, "sensed", s)] += comps[n].lever_gain / len(sensed)
         self._lever_play = self._lever[self._play_rows]
+
+    # ----------------------------------------------------------------------------- faults
+    def _check_faults(self) -> None:
+        """Every fault names a component of the right type, with the fields its kind needs (and
+        no other), each in range; an active stuck-open differential valve's table loses its dead
+        band here (:mod:`pneumatics.faults`)."""
+        chambers = set(self.chamber_names)
+        for i, f in enumerate(self.faults):
+            where = f"faults[{i}]"
+            if f.kind not in FAULT_KINDS:
+                raise CircuitError([where, "kind"], f"unknown fault kind {f.kind!r} (expected one of {', '.join(FAULT_KINDS)})")
+            comp = self.components.get(f.component)
+            if comp is None:
+                known = ", ".join(self.components)
+                raise CircuitError([where, "component"], f"{f.component!r} is not a component of the circuit "
+                                                         f"(components: {known})")
+            allowed, needs = _FAULT_RULES[f.kind]
+            if not (isinstance(comp, allowed) and (f.kind not in ("burst", "leak") or f.component in chambers)):
+                what = "a chamber (bellow, tank or finite supply)" if f.kind in ("burst", "leak") else \
+                    " or ".join(_TYPE_WORDS[t] for t in allowed)
+                raise CircuitError([where, "component"], f"a {f.kind} fault needs {what}; {f.component!r} is a "
+                                                         f"{_type_word(comp)}")
+            if not (math.isfinite(f.t_s) and f.t_s >= 0.0):
+                raise CircuitError([where, "t_s"], f"must be a finite time >= 0 s, got {f.t_s}")
+            if isinstance(comp, DifferentialPressureValve):
+                needs = ()                               # a differential valve has no sides or lever
+            for field in ("area_m2", "C_m3_per_sPa", "b_critical", "side", "lever_m"):
+                value = getattr(f, field)
+                if value is not None and field not in needs:
+                    raise CircuitError([where, field], f"is not used by a {f.kind} fault of a {_type_word(comp)}")
+            self._check_fault_values(f, where, comp)
+            if f.kind == "stuck_open" and isinstance(comp, DifferentialPressureValve) and i in self.active_faults:
+                self.components[f.component] = _without_dead_band(comp)
+
+    @staticmethod
+    def _check_fault_values(f: Fault, where: str, comp) -> None:
+        for field in ("area_m2", "C_m3_per_sPa"):
+            value = getattr(f, field)
+            if value is not None and not (math.isfinite(value) and value > 0.0):
+                raise CircuitError([where, field], f"must be a finite number > 0, got {value}")
+        if f.kind in ("burst", "leak") and (f.area_m2 is None) == (f.C_m3_per_sPa is None):
+            raise CircuitError([where, "area_m2"], "give the opening's effective area (area_m2) or its sonic "
+                                                   "conductance (C_m3_per_sPa), one of them")
+        if f.area_m2 is not None and f.C_m3_per_sPa is not None:
+            raise CircuitError([where, "C_m3_per_sPa"], "give area_m2 or C_m3_per_sPa, not both")
+        if f.b_critical is not None:
+            if f.C_m3_per_sPa is None:
+                raise CircuitError([where, "b_critical"], "goes with C_m3_per_sPa (an area is an ideal nozzle, b = 0.528)")
+            if not 0.0 <= f.b_critical < 1.0:
+                raise CircuitError([where, "b_critical"], f"must be in [0, 1), got {f.b_critical}")
+        if f.kind == "stuck_open" and isinstance(comp, LevellingValve) and f.side not in VALVE_SIDES:
+            raise CircuitError([where, "side"], f"which side is stuck open: expected one of {', '.join(VALVE_SIDES)}, "
+                                                f"got {f.side!r}")
+        if f.kind == "stuck_at" and not (f.lever_m is not None and math.isfinite(f.lever_m)):
+            raise CircuitError([where, "lever_m"], f"the lever displacement the valve is stuck at [m] (+ opens the "
+                                                   f"supply side), a finite number; got {f.lever_m}")
+
+    def _fault_openings(self):
+        """[(link name, fault index, node, C, b)]: the openings to the atmosphere the faults make
+        (a burst or leak at its chamber; a ruptured pipe at each end that is a chamber)."""
+        out = []
+        for i, f in enumerate(self.faults):
+            if f.kind in ("burst", "leak"):
+                out.append((f"{f.component}.{f.kind}", i, f.component, *self._opening(f, None)))
+            elif f.kind == "ruptured":
+                pipe = self.components[f.component]
+                for end in dict.fromkeys((pipe.a, pipe.b)):
+                    if end in self.chamber_names:
+                        out.append((f"{f.component}.ruptured@{end}", i, end, *self._opening(f, pipe.area_m2)))
+        return out
+
+    def _opening(self, f: Fault, bore_m2: Optional[float]) -> Tuple[float, float]:
+        """(C, b) of a fault's opening: its conductance, its area's ideal nozzle, or the bore's."""
+        if f.C_m3_per_sPa is not None:
+            return f.C_m3_per_sPa, (0.5 if f.b_critical is None else f.b_critical)
+        return nozzle_conductance(f.area_m2 if f.area_m2 is not None else bore_m2, self.gas)
+
+    def _compile_faults(self) -> None:
+        """What the active faults change besides their openings: links that carry nothing
+        (blocked, ruptured, a shut differential valve, every link of a lost supply), the pipe
+        states that stop with them, and the levers of stuck valves."""
+        blocked, stuck, lever = [], [], []
+        for i in sorted(self.active_faults):
+            f = self.faults[i]
+            if f.kind in ("blocked", "ruptured") or (f.kind == "stuck_closed" and f.component in self.link_names):
+                blocked.append(self.link_names.index(f.component))
+            elif f.kind == "supply_lost":
+                node = self._node_index[f.component]
+                blocked += [j for j in range(len(self.link_names)) if node in (self._a[j], self._b[j])]
+            elif isinstance(self.components[f.component], LevellingValve):   # stuck closed, open or at
+                valve = self.components[f.component]
+                stuck.append(self.valve_names.index(f.component))
+                if f.kind == "stuck_at":
+                    lever.append(f.lever_m)
+                elif f.kind == "stuck_closed":
+                    lever.append(0.0)                      # inside the dead band: both sides shut
+                else:                                      # the side's table end: fully open
+                    lever.append(max(valve.supply_lever_m) if f.side == "supply" else -max(valve.exhaust_lever_m))
+        blocked = sorted(set(blocked))
+        self._blocked = np.array(blocked, dtype=int) if blocked else None
+        pipes = [j for j in blocked if j < len(self.pipe_names)]
+        self._blocked_pipes = np.array(pipes, dtype=int) if pipes else None
+        self._stuck_valves = np.array(stuck, dtype=int) if stuck else None
+        self._stuck_lever = _column(lever)
+
+    def with_active_faults(self, active: Sequence[int]) -> "Circuit":
+        """The same circuit (same components, faults and state layout) with the faults of
+        indices ``active`` having happened."""
+        return Circuit(self._given_components, gas=self.gas, atmosphere=self.atmosphere, k_W_per_K=self.k_W_per_K,
+                       faults=self.faults, active_faults=active)
 
     def _compile_valve_dynamics(self, valves) -> int:
         """Index the valve-signal states (see the module docstring); returns their number.
@@ -578,6 +740,9 @@ class Circuit:
             else:
                 lever = self._lever @ z2
             nv, start = len(self._valves), self._n_orifices
+            if self._stuck_valves is not None:             # a stuck valve acts on its stuck lever
+                lever = lever.copy()
+                lever[self._stuck_valves] = self._stuck_lever
             for tables, sign, side in ((self._supply_tables, 1.0, C[start:start + nv]),
                                        (self._exhaust_tables, -1.0, C[start + nv:])):
                 for rows, xp, fp in tables:
@@ -585,6 +750,8 @@ class Circuit:
         if C.size:
             ia, ib = self._or_a, self._or_b
             w[self._or_rows] = orifice_flow_kg_per_s(C, self._b_crit, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
+        if self._blocked is not None:                      # faults: links that carry nothing
+            w[self._blocked] = 0.0
         return m, T, V, p, p_n, T_n, rho_n, w, chain, C[self._n_orifices:]
 
     def _per_bellow(self, values, x2: np.ndarray) -> np.ndarray:
@@ -631,6 +798,8 @@ class Circuit:
         pa, pb = self._pipe_a, self._pipe_b
         dx[self._s_q] = pipe_flow_rate_kg_per_s2(x2[self._s_q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
                                                  self._pipe_L, self._pipe_A, self._pipe_K)  # eq. (5)
+        if self._blocked_pipes is not None:               # a blocked pipe's air column stands still
+            dx[self._s_q][self._blocked_pipes] = 0.0
         dx[self._s_through] = w
         dx[lay.enthalpy_in] = self._boundary_sign @ Hw
         if self._valves:
@@ -718,10 +887,22 @@ class Circuit:
         return x[self.layout.m].sum(axis=0)
 
     def mass_from(self, x, node: str) -> np.ndarray:
-        """Cumulative mass that left boundary node ``node`` into the circuit (negative: received) [kg]."""
+        """Cumulative mass that left boundary node ``node`` into the circuit (negative: received)
+        [kg], through every link but the faults' openings (:meth:`air_lost_kg` counts those)."""
         i = self._node_index[node]
         sign = (self._a == i).astype(float) - (self._b == i).astype(float)
+        sign[self.fault_links] = 0.0
         return sign @ x[self.layout.mass_through]
+
+    def link_ends(self) -> list:
+        """(a node, b node) of every link, in the order of :attr:`link_names`: a positive flow
+        goes from a to b."""
+        return [(self.node_names[i], self.node_names[j]) for i, j in zip(self._a, self._b)]
+
+    def air_lost_kg(self, x) -> np.ndarray:
+        """Cumulative air lost to the atmosphere through the faults' openings (bursts, leaks,
+        ruptured pipes) [kg], per case; 0 without such faults."""
+        return x[self.layout.mass_through][self.fault_links].sum(axis=0)
 
     # ----------------------------------------------------------------------------- valves
     def valve_air_kg(self, x) -> ValveSides:
