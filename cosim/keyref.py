@@ -19,6 +19,7 @@ from cosim.scenario.model import (
 from cosim.scenario.schema import _type_name
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
+from pneumatics.faults import Fault
 from pneumatics.orifice import Orifice
 from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve, SafetyValve
@@ -34,6 +35,8 @@ CAR_SECTIONS = (
     ("track", TrackStructure, "the car kinds: `rigid` (the default), `flexible` (preset `slab_track`), or "
                               "{model: flexible, preset: slab_track, FIELD: value}"),
     ("vehicle", VehicleParams, "the car kinds: a parameter file, or {file: ..., FIELD: value}"),
+    ("faults[i]", Fault, "the car kinds: a list of faults, each {kind, component, t_s, ...}; kinds and what each "
+                         "needs: docs/faults.md"),
 )
 CIRCUIT_SECTIONS = (
     ("circuit.bellow", Bellow, "also `type: bellow` in circuit.components"),

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import re
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
 from cosim.errors import ScenarioError
 from cosim.master import COUPLINGS
 from cosim.scenario.checks import parse_checks
-from cosim.scenario.circuits import car_circuit, check_initial_state
+from cosim.scenario.circuits import car_circuit, check_initial_state, parse_faults
 from cosim.scenario.model import (
     DEFAULT_TRACK_MODEL,
     DEFAULT_TRACK_PRESET,
@@ -63,15 +64,43 @@ def apply_overrides(data: Dict[str, Any], overrides: Sequence[str], file) -> Dic
         parts = key.strip().split(".")
         if not all(parts):
             raise ScenarioError(file, ["--set"], f"expected key.path=value with a non-empty key path, got {item!r}")
-        node = data
+        node, last = data, parts[-1]
         for i, p in enumerate(parts[:-1]):
-            if not isinstance(node.get(p), dict):
-                if p in node:
-                    raise ScenarioError(file, parts[: i + 1], "--set cannot descend into a value that is not a mapping")
-                node[p] = {}
-            node = node[p]
-        node[parts[-1]] = parse_yaml(value, file, [f"--set {key.strip()}"])
+            node = _descend(node, p, parts[: i + 1], file)
+        value = parse_yaml(value, file, [f"--set {key.strip()}"])
+        item = _LIST_ITEM.fullmatch(last)
+        if item:
+            _descend(node, last, parts, file)            # the item must exist: an index within the list
+            node[item.group(1)][int(item.group(2))] = value
+        else:
+            node[last] = value
     return data
+
+
+#: a key path part that names a list item: ``faults[0]``
+_LIST_ITEM = re.compile(r"(.+)\[(\d+)\]")
+
+
+def _descend(node: Dict[str, Any], part: str, where: Sequence[str], file) -> Dict[str, Any]:
+    """The mapping at ``part`` of ``node`` for an override (created when absent); ``name[i]``:
+    item i of the list at ``name``, which must exist."""
+    item = _LIST_ITEM.fullmatch(part)
+    if item:
+        name, i = item.group(1), int(item.group(2))
+        items = node.get(name)
+        if not isinstance(items, list) or i >= len(items):
+            size = f"a list of {len(items)}" if isinstance(items, list) else "no list"
+            raise ScenarioError(file, where, f"--set can only change an item that exists; the scenario has {size} at {name!r}")
+        if not isinstance(items[i], dict):
+            raise ScenarioError(file, where, "--set cannot descend into a value that is not a mapping")
+        return items[i]
+    if not isinstance(node.get(part), dict):
+        if isinstance(node.get(part), list):
+            raise ScenarioError(file, where, f"is a list: name an item of it, e.g. {part}[0]")
+        if part in node:
+            raise ScenarioError(file, where, "--set cannot descend into a value that is not a mapping")
+        node[part] = {}
+    return node[part]
 
 
 def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequence[float]] = None) -> Scenario:
@@ -98,8 +127,8 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         raise ScenarioError(path, ["kind"], f"unknown kind {name!r} (expected one of {', '.join(KINDS)})")
     kind = KINDS[name]
     if kind.car:
-        check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "track", "circuit", kind.section,
-                          "solver", "verify", "state_limits", "checks", "allow"), path, [])
+        check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "track", "circuit", "faults",
+                          kind.section, "solver", "verify", "state_limits", "checks", "allow"), path, [])
     else:
         check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", kind.section, "allow"), path, [])
     ks = (k_values(list(k_override), path, ["--k"]) if k_override
@@ -137,6 +166,8 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
         valve_settings = (circuit.valves,)
         experiment = dataclasses.replace(experiment, valve_settings=valve_settings)
     _check_steps(solver, code.duration_s(experiment), path)
+    circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit,
+                                                               code.duration_s(experiment), valve_settings))
     check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
     state_limits = _state_limits(data.get("state_limits"), path)

@@ -146,8 +146,10 @@ OUTPUTS = (
       for i, (axis, meaning) in enumerate((("x", "forward"), ("y", "left"), ("z", "up")))),
     Output("air_from_supply_kg", (), "kg", "air injected from the supply (cumulative)", "air_from_supply_kg",
            _air_from("supply")),
-    Output("air_to_atmosphere_kg", (), "kg", "air exhausted to the atmosphere (cumulative)", "air_to_atmosphere_kg",
-           _air_from("atmosphere", -1.0)),
+    Output("air_to_atmosphere_kg", (), "kg", "air exhausted to the atmosphere by the valves (cumulative)",
+           "air_to_atmosphere_kg", _air_from("atmosphere", -1.0)),
+    Output("air_lost_kg", (), "kg", "air lost to the atmosphere through the faults' openings: bursts, leaks, "
+           "ruptured pipes (cumulative)", "air_lost_kg", lambda s: s.sim.circuit.air_lost_kg(s.sim.x)),
     Output("link_flow_kg_per_s", ("link",), "kg/s", "mass flow through each link, from its a node to its b node", None,
            lambda s: s.circuit.link_flow_kg_per_s),
     Output("total_mass_kg", (), "kg", "air in all chambers", None, lambda s: s.sim.circuit.total_mass_kg(s.sim.x)),
@@ -196,6 +198,12 @@ class CoSimulation:
     Cases are independent: one that diverges (its multibody solver fails, or its air leaves the
     physical range) is stopped and frozen, with a diagnosis, while the others go on; its record
     holds NaN from then on.
+
+    Faults (``circuit.faults``, :mod:`pneumatics.faults`) happen at their own times: the air is
+    integrated up to a fault's time with the circuit before it and on with the circuit after
+    it (:meth:`Circuit.with_active_faults`), within the macro-step, so the instant is exact
+    whatever the steps; the force law of that step is the one of its start, anchored again to
+    the faulted air at the next step (a one-step O(H) force error, O(H^2) in what it moves).
     """
 
     def __init__(self, cars: Sequence, circuit: Circuit, x0: np.ndarray, macro_step_s: float,
@@ -221,6 +229,32 @@ class CoSimulation:
         self.watch = watch
         self._watch_every = max(1, round(StateWatch.INTERVAL_S / macro_step_s))
         self._steps = 0
+        #: [(time, circuit from then on)] of the faults still to happen, by time
+        times = sorted({f.t_s for f in circuit.faults})
+        self._faults = [(t, circuit.with_active_faults([i for i, f in enumerate(circuit.faults) if f.t_s <= t]))
+                        for t in times]
+        self._switch_faults(0.0)
+
+    #: faults within this time of a macro-step boundary happen at it [s] (round-off of t_n)
+    FAULT_TIME_TOL_S = 1e-9
+
+    def _switch_faults(self, t: float) -> None:
+        """The circuit with every fault up to ``t`` active."""
+        while self._faults and self._faults[0][0] <= t + self.FAULT_TIME_TOL_S:
+            self.circuit = self._faults.pop(0)[1]
+
+    def _advance_air(self, t1: float, motion, rate) -> np.ndarray:
+        """The circuit's state at ``t1`` from (t_n, x_n) along ``motion``, switching the circuit
+        at the faults that happen within the step (``rate``: d(state)/dt at t_n, see :meth:`step`)."""
+        x, t = self.x, self.t
+        while self._faults and self._faults[0][0] < t1 - self.FAULT_TIME_TOL_S:
+            t_fault = self._faults[0][0]
+            x = advance(self.circuit, x, t, t_fault, motion, self.h_pneumatic, rate0=rate)
+            t, rate = t_fault, None
+            self._switch_faults(t)
+        x = advance(self.circuit, x, t, t1, motion, self.h_pneumatic, rate0=rate)
+        self._switch_faults(t1)
+        return x
 
     def _crushing(self):
         zs, zds = [], []
@@ -250,7 +284,7 @@ class CoSimulation:
         motion = hermite_motion(self.t, t1, self.z, self.zd, z1, zd1)
         with np.errstate(all="ignore"):               # a diverging column is diagnosed just below
             # the motion starts at (z_n, zd_n) exactly, so RK4's first stage is ``rate``
-            x1 = advance(self.circuit, self.x, self.t, t1, motion, self.h_pneumatic, rate0=rate)
+            x1 = self._advance_air(t1, motion, rate)
         self._stop_diverged(x1, t1)
         if watching:
             self._stop_impossible_air(x1, z1, t1)

@@ -21,6 +21,9 @@ def run(scenario: Scenario, progress: Optional[Progress] = None) -> Outcome:
     carries its validity flags (:mod:`cosim.limits.validity`)."""
     outcome = KINDS[scenario.kind].code.run(scenario, progress or Progress(scenario.name, quiet=True))
     outcome.interrupted = stop_requested()
+    faults = _faults_label(scenario)
+    if faults:                                    # every row says what failed
+        outcome.rows = [{**row, "faults": faults} for row in outcome.rows]
     flag_rows(outcome.rows)
     for message in warnings_for(outcome.rows):
         warn(outcome.warnings, message)
@@ -31,5 +34,14 @@ def run_scenario(scenario: Scenario, out_dir: Path, progress: Progress) -> Outco
     """Run ``scenario`` and write its results into ``out_dir``."""
     kind = KINDS[scenario.kind]
     outcome = run(scenario, progress)
-    write_outcome(outcome, out_dir, kind.code.figures(outcome), scenario.solver.jobs if kind.car else 1)
+    figures = kind.code.figures(outcome)
+    faults = _faults_label(scenario)
+    for figure in figures if faults else ():     # every figure says what failed
+        figure.title = f"{figure.title or ''}\nfaults: {faults}".lstrip("\n")
+    write_outcome(outcome, out_dir, figures, scenario.solver.jobs if kind.car else 1)
     return outcome
+
+
+def _faults_label(scenario: Scenario) -> str:
+    """The scenario's faults in words; empty without faults (or for a rig)."""
+    return getattr(scenario.circuit, "faults_label", lambda: "")()

@@ -13,12 +13,12 @@ from cosim.limits.criteria import static_wheel_loads, wheel_unloading
 from cosim.limits.watch import StateWatch
 from cosim.master import CoSimulation
 from cosim.results.io import Progress
-from cosim.results.plots import Curve, Panel, k_legend
+from cosim.results.plots import Curve, Figure, Panel, k_legend
 from cosim.results.series import car_dataset, concat_cases
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import k_label
-from pneumatics.circuit import Circuit
 from pneumatics.layouts import static_pressures
+from pneumatics.valves import DifferentialPressureValve
 from vehicle.params import BELLOWS
 
 #: make_car(scenario) -> a car with the vehicle.car.MetroCar interface (module-level: picklable)
@@ -30,7 +30,7 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
     settings = scenario.solver
     cars = [make_car(scenario) for _ in k_values]
     components = scenario.circuit.components()
-    circuit = Circuit(components, k_W_per_K=np.asarray(k_values, dtype=float))
+    circuit = scenario.circuit.compile(np.asarray(k_values, dtype=float))
     if tuple(circuit.bellow_names) != BELLOWS:
         raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
     x0 = circuit.initial_state(static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa),
@@ -120,7 +120,7 @@ def simulate_cases(scenario: Scenario, settings: Sequence[Optional[bool]], make_
               for v in variants]
     datasets, diagnoses = [], []
     for variant, (chunks, diag) in zip(variants, simulate_variants(variants, make_car, duration_s, labels)):
-        circuit = Circuit(variant.circuit.components())
+        circuit = variant.circuit.compile()
         valves = variant.circuit.valves
         parts = [car_dataset(arrays, ks, valves, named, circuit.link_names, circuit.valve_names) for ks, arrays in chunks]
         ds = concat_cases(parts)
@@ -158,3 +158,67 @@ def bellow_panels(ds: xr.Dataset) -> List[Panel]:
 def of_setting(ds: xr.Dataset, valves: Optional[bool]) -> xr.Dataset:
     """The cases of one valve setting (None: every case)."""
     return ds if valves is None else ds.isel(case=np.flatnonzero(ds["valves"].values == valves))
+
+
+def air_columns(case: xr.Dataset) -> Dict[str, float]:
+    """The air a case exchanged with the outside (cumulative, at its last sample) [kg]: injected
+    from the supply, exhausted by the valves, lost through the faults' openings; and the error of
+    the mass balance air(end) - air(start) - (injected - exhausted - lost), which closes to the
+    integrator's round-off (the circuit holds every term as a state)."""
+    m = case["total_mass_kg"].values
+    columns = {"air_injected_kg": float(case["air_from_supply_kg"].values[-1]),
+               "air_exhausted_kg": float(case["air_to_atmosphere_kg"].values[-1]) + 0.0,   # no "-0"
+               "air_lost_kg": float(case["air_lost_kg"].values[-1]) + 0.0}
+    columns["mass_balance_error_kg"] = float(m[-1] - m[0] - columns["air_injected_kg"] + columns["air_exhausted_kg"]
+                                             + columns["air_lost_kg"])
+    return columns
+
+
+def fault_figure(scenario: Scenario, ds: xr.Dataset, suffix: str = "", valves_text: str = "") -> List[Figure]:
+    """With faults: the air lost through their openings, the flow of every differential valve
+    and the flow through every faulted link (each against time, one curve per case); none
+    without faults."""
+    faults = scenario.circuit.faults
+    if not faults:
+        return []
+    panels = [Panel(per_case(ds["air_lost_kg"], 1e3), "time t [s]", "air lost [g]", "through the faults' openings")]
+    circuit = scenario.circuit.compile()
+    ends = dict(zip(circuit.link_names, circuit.link_ends()))
+    links = [str(n) for n in ds["link"].values] if "link" in ds.dims else []
+    named = {f.component for f in faults}
+    shown = [n for n in links if n in ends and (isinstance(circuit.components.get(n), DifferentialPressureValve)
+                                                or n.split(".")[0].split("@")[0] in named)]
+    for link in shown:
+        flow = ds["link_flow_kg_per_s"].sel(link=link)
+        if np.all(np.isnan(flow.values)):
+            continue                                  # a link of the other valve setting's circuit
+        a, b = ends[link]
+        panels.append(Panel(per_case(flow, 1e3), "time t [s]", f"flow {a} → {b} [g/s]", link))
+    return [Figure(f"faults{suffix}.png", panels, f"Air lost and flows of the faulted and differential valves"
+                                                  f"{valves_text}", 2)]
+
+
+#: the window before a fault over which the state it strikes is averaged [s]
+BEFORE_FAULT_S = 1.0
+
+
+def fault_columns(scenario: Scenario, case: xr.Dataset) -> Dict[str, float]:
+    """The transient after the first fault that happens during the run (t > 0; none: no columns):
+    ``roll_before_fault_rad``, the carbody roll (to the track plane where the run has it)
+    averaged over the second before; ``roll_max_after_fault_rad``, its largest magnitude after;
+    ``dqq_max_after_fault``, the largest wheel unloading ΔQ/Q0 after (its EN 14363 2 m mean where
+    the run has it); ``yq_2m_max_after_fault`` likewise for Y/Q on the wheel-rail contact."""
+    times = [f.t_s for f in scenario.circuit.faults if f.t_s > 0.0]
+    if not times:
+        return {}
+    t_fault = min(times)
+    t = case["time"].values
+    after, before = t >= t_fault, (t >= t_fault - BEFORE_FAULT_S) & (t < t_fault)
+    roll = case["roll_rel_rad"] if "roll_rel_rad" in case else case["roll_rad"]
+    dqq = case["dqq_2m"] if "dqq_2m" in case else case["dqq"]
+    columns = {"roll_before_fault_rad": float(np.mean(roll.values[before])) if before.any() else float("nan"),
+               "roll_max_after_fault_rad": float(np.max(np.abs(roll.values[after]))),
+               "dqq_max_after_fault": float(np.max(dqq.transpose("time", "wheel").values[after]))}
+    if "y_over_q_2m" in case:
+        columns["yq_2m_max_after_fault"] = float(np.max(case["y_over_q_2m"].transpose("time", "wheel").values[after]))
+    return columns

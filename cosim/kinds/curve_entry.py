@@ -18,7 +18,7 @@ import xarray as xr
 from cosim.errors import ScenarioError
 from cosim.kinds import en14363
 from cosim.kinds.base import Kind
-from cosim.kinds.car import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
+from cosim.kinds.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case, simulate_cases
 from cosim.kinds.comfort import comfort_columns
 from cosim.limits.assessment import STEP_M
 from cosim.limits.checks import CaseMetrics
@@ -473,6 +473,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         row.update(en14363.summary_columns(found))
         row.update(en14363.stability_columns(case, curve.speed_m_per_s, sum_y_lim))
         row.update(comfort_columns(case))
+        row.update(fault_columns(scenario, case))
         rows.append(row)
         cases.append(case_metrics(row, en14363.zone_metrics(found, stats)))
         statistics += en14363.statistics_rows(stats, row["valves"], row["k_W_per_K"])
@@ -547,9 +548,9 @@ def summary_row(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     roll = case["roll_rel_rad"].values
     row = {"valves": bool(case["valves"]), "k_W_per_K": float(case["k_W_per_K"]),
            "roll_max_rad": float(np.abs(roll).max()),
-           "roll_mean_end_rad": float(window_mean(t, roll, curve.window)),
-           "air_injected_kg": float(case["air_from_supply_kg"].values[-1]),
-           "air_exhausted_kg": float(case["air_to_atmosphere_kg"].values[-1]) + 0.0}  # no "-0"
+           "roll_mean_end_rad": float(window_mean(t, roll, curve.window))}
+    air = air_columns(case)
+    row.update({name: air[name] for name in ("air_injected_kg", "air_exhausted_kg", "air_lost_kg")})
     z = window_mean(t, case["crushing_m"].transpose("time", "bellow").values, curve.window)
     row.update({f"z_mean_end_{b}_m": float(z[i]) for i, b in enumerate(BELLOWS)})
     duration = float(t[-1] - t[0])
@@ -569,8 +570,7 @@ def summary_row(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     m = case["total_mass_kg"].values
     row["air_initial_kg"] = float(m[0])  # the air the circuit holds at the start (verify's floor for air)
     row["Q0_N"] = float(case["Q0_N"].mean())  # the static wheel load (verify's floor for forces)
-    row["mass_balance_error_kg"] = float(m[-1] - m[0] - case["air_from_supply_kg"].values[-1]
-                                         + case["air_to_atmosphere_kg"].values[-1])
+    row["mass_balance_error_kg"] = air["mass_balance_error_kg"]
     row.update(wheel_rail_summary(case, curve))
     return row
 
@@ -658,6 +658,7 @@ def figures(outcome: Outcome) -> List[Figure]:
                                Panel(per_case(sub["air_to_atmosphere_kg"], 1e3), "time t [s]",
                                      "air exhausted to the atmosphere [g]")],
                               "Air consumption of the levelling valves (paper Table 4)", 2))
+        out += fault_figure(outcome.scenario, sub, f"_valves={tag}", f", valves {tag}")
     if outcome.scenario.curve.contact:
         out += wheel_rail_figures(ds, outcome.scenario.curve, outcome.rows)
     return out
@@ -751,7 +752,8 @@ def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List
 
 
 KIND = Kind("curve_entry", "curve", CurveTest, __name__, car=True,
-            check_metrics=("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "yq_max", "sum_y_max", "dqq_raw_max",
+            check_metrics=("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "air_lost_kg", "yq_max", "sum_y_max",
+                           "dqq_raw_max",
                            "dqq_2m_max", "sum_y_rms_max", *en14363.METRICS),
             wheel_metrics=("dqq_raw_max", "yq_max", "dqq_2m_max",
                            *(m for m, (q, _, _) in en14363.METRICS.items() if en14363.QUANTITIES.get(q, ("", ""))[1] == "wheel")),

@@ -14,7 +14,7 @@ import xarray as xr
 
 from cosim.errors import ScenarioError
 from cosim.kinds.base import Kind
-from cosim.kinds.car import add_wheel_unloading, bellow_panels, of_setting, per_case, simulate_cases
+from cosim.kinds.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case, simulate_cases
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading, window_drift, window_mean
 from cosim.results.io import Progress
@@ -66,6 +66,9 @@ class TwistTest:
     :func:`cosim.kinds.twist.rail_heights` for the track geometry. Without it: Fig. 7, the carbody twist
     alone.
 
+    ``start_s``: the ramp starts at this time (default 0): a wait on level track, e.g. for bellows
+    that a fault at t = 0 deflates to blow down and the car to settle on its emergency springs.
+
     ``window_s``: final window over which the quasi-static end values are averaged (default 5 s,
     or the whole hold if that is shorter); ``settle_drift``: the case counts as settled when every
     wheel's ΔQ/Q0 drifts by less than that over the final window: its mean over the final window
@@ -80,6 +83,7 @@ class TwistTest:
     raised_wheels: Tuple[str, ...] = ("1R", "2R")
     ramp_s: float = 5.0
     hold_s: float = 35.0
+    start_s: float = 0.0
     bogie_base_m: Optional[float] = None
     bogie_twist_per_mille: Optional[float] = None
     window_s: Optional[float] = None
@@ -87,7 +91,8 @@ class TwistTest:
     valve_settings: Optional[Tuple[bool, ...]] = None
 
     FIELD_RANGES = {"base_m": positive("m", "the base length 2a*"), "bogie_base_m": positive("m", "the wheelbase 2a+"),
-                    "twist_per_mille": _TWIST, "bogie_twist_per_mille": _TWIST, "settle_drift": positive(why="a drift of dQ/Q0")}
+                    "twist_per_mille": _TWIST, "bogie_twist_per_mille": _TWIST, "settle_drift": positive(why="a drift of dQ/Q0"),
+                    "start_s": Range(0.0, 3600.0, unit="s", why="a wait before the ramp, up to an hour")}
     FIELD_LIST_RULES = {"raised_wheels": (True, True)}
 
     @property
@@ -116,7 +121,7 @@ class TwistTest:
 
     @property
     def duration_s(self) -> float:
-        return self.ramp_s + self.hold_s
+        return self.start_s + self.ramp_s + self.hold_s
 
     @property
     def window(self) -> float:
@@ -235,16 +240,16 @@ def rail_heights(test: TwistTest):
     unloads most.
     """
     raised = np.array([w in test.raised_wheels for w in WHEELS], dtype=float)
-    h, ramp = test.height_m, test.ramp_s
+    h, ramp, start = test.height_m, test.ramp_s, test.start_s
     if test.bogie_base_m is None:
         def rail(t: float) -> np.ndarray:
-            s = min(max(t / ramp, 0.0), 1.0)
+            s = min(max((t - start) / ramp, 0.0), 1.0)
             return raised * (h * 0.5 * (1.0 - math.cos(math.pi * s)))
         return rail
     full = raised * np.repeat(twisted_rail_m(test, wheelset_x_m(test)), 2)
 
     def twisted(t: float) -> np.ndarray:
-        s = min(max(t / ramp, 0.0), 1.0)
+        s = min(max((t - start) / ramp, 0.0), 1.0)
         return full * (0.5 * (1.0 - math.cos(math.pi * s)))
     return twisted
 
@@ -304,6 +309,8 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         k, valves = float(k), bool(valves)
         row = {"valves": valves, "k_W_per_K": k, **twist_metrics(t, dqq, test, j)}
         row["roll_carbody_mean_end_rad"] = float(window_mean(t, ds["roll_rad"].values[:, j], test.window))
+        row.update(air_columns(ds.isel(case=j)))
+        row.update(fault_columns(scenario, ds.isel(case=j)))
         T = ds["bellow_T_K"].isel(case=j).values
         row["T_bellow_max_K"], row["T_bellow_min_K"] = float(T.max()), float(T.min())
         rows.append(row)
@@ -367,6 +374,7 @@ def figures(outcome: Outcome) -> List[Figure]:
                               hlines=[(limit, f"limit {limit:g}")]) for w in wheels],
                        f"Wheel unloading ΔQ/Q0 (positive: unloaded){valves}", 2),
                 Figure(f"bellows{suffix}.png", bellow_panels(sub), f"Bellow pressures and temperatures{valves}", 2)]
+        out += fault_figure(outcome.scenario, sub, suffix, valves)
     return out
 
 

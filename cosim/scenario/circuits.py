@@ -4,7 +4,7 @@ once, so that an inconsistent circuit fails before any simulation."""
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Dict, Mapping, Sequence
+from typing import Any, Dict, Mapping, Sequence, Tuple
 
 from cosim.errors import ScenarioError
 from cosim.scenario.model import CarCircuit
@@ -12,6 +12,7 @@ from cosim.scenario.schema import build, check_keys, coerce, describe, known_nam
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import COMPONENT_TYPES, Circuit, CircuitError
+from pneumatics.faults import Fault
 from pneumatics.layouts import BELLOWS, static_pressures
 from pneumatics.pipe import Pipe
 from pneumatics.presets import CIRCUIT_PRESETS
@@ -177,3 +178,33 @@ def check_initial_state(circuit: CarCircuit, car, ks, valve_settings, path) -> N
             if exc.reason == "initial pressure is not set":
                 exc.reason += " (give it p0_Pa, or join it to a bellow by a pipe or an orifice: it starts at the bellow's)"
             raise circuit_error(exc, path, prefix, keys) from None
+
+
+def parse_faults(value, file, circuit: CarCircuit, duration_s: float, valve_settings) -> Tuple[Fault, ...]:
+    """``faults:``, a list of {kind, component, t_s, ...} (:mod:`pneumatics.faults`): each names a
+    component of the circuit of the right type, with what its kind needs, and happens within
+    the run, in every valve setting the scenario runs (a valve's fault needs the valves)."""
+    if value is None:
+        return ()
+    if not isinstance(value, list):
+        raise ScenarioError(file, ["faults"], f"expected a list of faults ({{kind, component, t_s, ...}}), got "
+                                              f"{describe(value)}")
+    faults = tuple(build(Fault, item, file, [f"faults[{i}]"]) for i, item in enumerate(value))
+    for i, f in enumerate(faults):
+        if not f.t_s < duration_s:
+            raise ScenarioError(file, [f"faults[{i}]", "t_s"], f"the fault must happen within the run, before its end "
+                                                               f"at {duration_s:g} s; got {f.t_s:g} s")
+    explicit = circuit.explicit is not None
+    for setting in dict.fromkeys(valve_settings):
+        components = circuit.components() if explicit else dataclasses.replace(circuit, valves=setting).components()
+        try:
+            Circuit(components, faults=faults)
+        except CircuitError as exc:
+            name = faults[int(exc.path[0][7:-1])].component if exc.path[0].startswith("faults[") else ""
+            if (not setting and not explicit and name not in components
+                    and name in dataclasses.replace(circuit, valves=True).components()):
+                exc.reason = (f"{name!r} is part of the valves, which this scenario also runs isolated "
+                              f"(valve_settings includes false): run with the valves connected only "
+                              f"(valve_settings: [true])")
+            raise ScenarioError(file, list(exc.path), exc.reason) from None
+    return faults

@@ -13,6 +13,8 @@ from typing import Any, Dict, Optional, Tuple
 from cosim.scenario.checks import Check
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
+from pneumatics.circuit import Circuit
+from pneumatics.faults import Fault
 from pneumatics.layouts import car_circuit
 from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
@@ -109,6 +111,8 @@ class CarCircuit:
     supply: Supply
     cross_pipe: Optional[Pipe]
     explicit: Optional[Tuple[Tuple[str, object], ...]] = None
+    #: what fails, when (``faults:``; :mod:`pneumatics.faults`)
+    faults: Tuple[Fault, ...] = ()
 
     def components(self) -> Dict[str, object]:
         if self.explicit is not None:
@@ -118,6 +122,14 @@ class CarCircuit:
                            differential=self.differential_valve if self.valves else None,
                            supply=self.supply, points=4 if self.layout == "four_point" else 2,
                            cross_pipe=self.cross_pipe)
+
+    def compile(self, k_W_per_K=0.0) -> Circuit:
+        """The circuit with its faults (none happened yet), for the k values ``k_W_per_K``."""
+        return Circuit(self.components(), k_W_per_K=k_W_per_K, faults=self.faults)
+
+    def faults_label(self) -> str:
+        """The faults in words (summary rows, figure titles); empty without faults."""
+        return "; ".join(f.label() for f in self.faults)
 
 
 # ----------------------------------------------------------------------------------- scenario

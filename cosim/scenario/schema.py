@@ -110,6 +110,11 @@ RANGES: Dict[str, Range] = {
     "LevellingValve.hysteresis_m": Range(0.0, 0.05, unit="m", why="the lever's play; 0: no play"),
     "LevellingValve.delay_stages": Range(1, 1000, why="first-order stages approximating the delay; "
                                                       "one state each"),
+    "Fault.t_s": nonnegative("s", "when the fault happens; 0: from the start"),
+    "Fault.area_m2": Range(0.0, 0.1, False, True, "m^2", "an opening's effective area (a bellow's is ~0.13 m^2)"),
+    "Fault.C_m3_per_sPa": Range(0.0, 1e-4, False, True, "m^3/(s Pa)", "an ISO 6358 sonic conductance"),
+    "Fault.b_critical": Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio"),
+    "Fault.lever_m": Range(-0.2, 0.2, unit="m", why="a levelling valve's lever displacement (+ opens the supply side)"),
     "SolverSettings.jobs": Range(1, 256, why="worker processes"),
     "StateLimits.carbody_roll_rad": Range(0.0, 3.2, False, True, "rad", "a roll relative to the track plane"),
     "StateLimits.bogie_roll_rad": Range(0.0, 3.2, False, True, "rad", "a roll relative to the track plane"),

@@ -381,9 +381,35 @@ CROSS = {  # rules between fields
     "check on an unknown k": Case("twist", "checks[0]", "k", {"checks": ["dqq_max[k=5] <= 0.6"]}),
 }
 
+def _burst(**fields):
+    return [{"kind": "burst", "component": "FL", "t_s": 0.5, "area_m2": 5e-4, **fields}]
+
+
+FAULTS = {  # faults: validated before anything runs (the twist base: 2 s, valves isolated)
+    "fault of a component not in the circuit": Case("twist", "faults[0].component", "not a component",
+                                                    {"faults": _burst(component="XX")}),
+    "burst of a pipe": Case("twist", "faults[0].component", "needs a chamber", {"faults": _burst(component="pipe_FL")}),
+    "pipe blocked given a bellow": Case("twist", "faults[0].component", "needs pipe or orifice",
+                                        {"faults": [{"kind": "blocked", "component": "FL"}]}),
+    "fault after the end of the run": Case("twist", "faults[0].t_s", "within the run", {"faults": _burst(t_s=5.0)}),
+    "fault before the start": Case("twist", "faults[0].t_s", ">= 0", {"faults": _burst(t_s=-1.0)}),
+    "burst without an opening": Case("twist", "faults[0].area_m2", "one of them", {"faults": _burst(area_m2=None)}),
+    "burst area in cm^2": Case("twist", "faults[0].area_m2", "cm^2", {"faults": _burst(area_m2=5.0)}),
+    "unknown fault kind": Case("twist", "faults[0].kind", "unknown fault kind", {"faults": _burst(kind="explode")}),
+    "unknown fault key": Case("twist", "faults[0].where", "unknown key", {"faults": _burst(where="FL")}),
+    "faults not a list": Case("twist", "faults", "a list of faults", {"faults": {"kind": "burst"}}),
+    "valve fault with the valves isolated": Case("en", "faults[0].component", "valve_settings: [true]",
+                                                 {"faults": [{"kind": "stuck_closed", "component": "lv_FL"}]}),
+    "stuck-open valve without a side": Case("en", "faults[0].side", "supply, exhaust",
+                                            {"faults": [{"kind": "stuck_open", "component": "lv_FL"}],
+                                             "twist.valve_settings": [True]}),
+    "--set of a fault that is not there": Case("twist", "faults[1]", "list of 1", {"faults": _burst()},
+                                               argv=["--set", "faults[1].t_s=1.0"]),
+}
+
 CORPUS = {f"{group}: {name}": case for group, cases in (
     ("numbers", NUMBERS), ("duplicates", DUPLICATES), ("files", FILES), ("keys", KEYS), ("types", TYPES),
-    ("cross-field", CROSS)) for name, case in cases.items()}
+    ("cross-field", CROSS), ("faults", FAULTS)) for name, case in cases.items()}
 
 
 def test_the_corpus_is_large_enough():
