@@ -166,8 +166,9 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
         valve_settings = (circuit.valves,)
         experiment = dataclasses.replace(experiment, valve_settings=valve_settings)
     _check_steps(solver, code.duration_s(experiment), path)
-    circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit,
-                                                               code.duration_s(experiment), valve_settings))
+    shortest = getattr(code, "shortest_duration_s", code.duration_s)(experiment)   # every case sees every fault
+    circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit, shortest,
+                                                               valve_settings))
     check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
     state_limits = _state_limits(data.get("state_limits"), path)

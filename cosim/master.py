@@ -153,6 +153,8 @@ OUTPUTS = (
     Output("link_flow_kg_per_s", ("link",), "kg/s", "mass flow through each link, from its a node to its b node", None,
            lambda s: s.circuit.link_flow_kg_per_s),
     Output("total_mass_kg", (), "kg", "air in all chambers", None, lambda s: s.sim.circuit.total_mass_kg(s.sim.x)),
+    Output("net_inflow_kg", (), "kg", "air that entered the chambers from outside, net of what left (cumulative)",
+           None, lambda s: s.sim.circuit.net_inflow_kg(s.sim.x)),
     Output("valve_supply_air_kg", ("valve",), "kg", "air through each levelling valve's supply side (cumulative)",
            None, lambda s: s.valve_air.supply),
     Output("valve_exhaust_air_kg", ("valve",), "kg", "air through each levelling valve's exhaust side (cumulative)",

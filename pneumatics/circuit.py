@@ -113,9 +113,10 @@ def _without_dead_band(valve: DifferentialPressureValve) -> DifferentialPressure
     """A differential valve stuck open: its flow table shifted so that it opens at dp = 0, the
     flow it passed at dp_0 + dp now passing at dp (dp_0: the last table point of zero flow)."""
     dp, q = np.asarray(valve.dp_Pa, float), np.asarray(valve.q_kg_per_s, float)
-    first = int(np.flatnonzero(q > 0)[0]) - 1 if np.any(q > 0) else len(q) - 1
-    first = max(first, 0)
-    return dataclasses.replace(valve, dp_Pa=tuple(dp[first:] - dp[first]), q_kg_per_s=tuple(q[first:]))
+    if q[0] > 0 or not np.any(q > 0):         # no dead band to remove (or a valve that never passes air)
+        return valve
+    last_shut = int(np.flatnonzero(q > 0)[0]) - 1
+    return dataclasses.replace(valve, dp_Pa=tuple(dp[last_shut:] - dp[last_shut]), q_kg_per_s=tuple(q[last_shut:]))
 
 
 class CircuitError(ValueError):
@@ -532,7 +533,8 @@ class Circuit:
                 for end in dict.fromkeys((pipe.a, pipe.b)):
                     if end in self.chamber_names:
                         out.append((f"{f.component}.ruptured@{end}", i, end, *self._opening(f, pipe.area_m2)))
-        return out
+        names = [o[0] for o in out]             # a second opening of the same name: the fault's index added
+        return [(name if names.count(name) == 1 else f"{name}[{i}]", i, *rest) for name, i, *rest in out]
 
     def _opening(self, f: Fault, bore_m2: Optional[float]) -> Tuple[float, float]:
         """(C, b) of a fault's opening: its conductance, its area's ideal nozzle, or the bore's."""
@@ -544,29 +546,31 @@ class Circuit:
         """What the active faults change besides their openings: links that carry nothing
         (blocked, ruptured, a shut differential valve, every link of a lost supply), the pipe
         states that stop with them, and the levers of stuck valves."""
-        blocked, stuck, lever = [], [], []
-        for i in sorted(self.active_faults):
+        blocked, stuck = [], {}
+        openings = set(range(self.fault_links.start, self.fault_links.stop))
+        for i in sorted(self.active_faults, key=lambda i: (self.faults[i].t_s, i)):   # the latest fault wins
             f = self.faults[i]
             if f.kind in ("blocked", "ruptured") or (f.kind == "stuck_closed" and f.component in self.link_names):
                 blocked.append(self.link_names.index(f.component))
-            elif f.kind == "supply_lost":
+            elif f.kind == "supply_lost":                  # every link but a fault's own opening
                 node = self._node_index[f.component]
-                blocked += [j for j in range(len(self.link_names)) if node in (self._a[j], self._b[j])]
+                blocked += [j for j in range(len(self.link_names))
+                            if node in (self._a[j], self._b[j]) and j not in openings]
             elif isinstance(self.components[f.component], LevellingValve):   # stuck closed, open or at
                 valve = self.components[f.component]
-                stuck.append(self.valve_names.index(f.component))
                 if f.kind == "stuck_at":
-                    lever.append(f.lever_m)
+                    lever = f.lever_m
                 elif f.kind == "stuck_closed":
-                    lever.append(0.0)                      # inside the dead band: both sides shut
+                    lever = 0.0                            # inside the dead band: both sides shut
                 else:                                      # the side's table end: fully open
-                    lever.append(max(valve.supply_lever_m) if f.side == "supply" else -max(valve.exhaust_lever_m))
+                    lever = max(valve.supply_lever_m) if f.side == "supply" else -max(valve.exhaust_lever_m)
+                stuck[self.valve_names.index(f.component)] = lever
         blocked = sorted(set(blocked))
         self._blocked = np.array(blocked, dtype=int) if blocked else None
         pipes = [j for j in blocked if j < len(self.pipe_names)]
         self._blocked_pipes = np.array(pipes, dtype=int) if pipes else None
-        self._stuck_valves = np.array(stuck, dtype=int) if stuck else None
-        self._stuck_lever = _column(lever)
+        self._stuck_valves = np.array(list(stuck), dtype=int) if stuck else None
+        self._stuck_lever = _column(list(stuck.values()))
 
     def with_active_faults(self, active: Sequence[int]) -> "Circuit":
         """The same circuit (same components, faults and state layout) with the faults of
@@ -898,6 +902,14 @@ class Circuit:
         """(a node, b node) of every link, in the order of :attr:`link_names`: a positive flow
         goes from a to b."""
         return [(self.node_names[i], self.node_names[j]) for i, j in zip(self._a, self._b)]
+
+    def net_inflow_kg(self, x) -> np.ndarray:
+        """Cumulative air that entered the chambers from outside [kg], per case: from every
+        boundary node (the atmosphere, fixed supplies) minus what the faults' openings lost. The
+        air in the chambers changes by exactly this (a finite supply is a chamber: what it
+        delivers is moved, not gained)."""
+        inflow = sum(self.mass_from(x, node) for node in self.boundary_names)
+        return inflow - self.air_lost_kg(x)
 
     def air_lost_kg(self, x) -> np.ndarray:
         """Cumulative air lost to the atmosphere through the faults' openings (bursts, leaks,

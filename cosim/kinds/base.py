@@ -14,6 +14,8 @@ Functions a kind module provides (``Kind.module`` names it; imported when needed
 * ``duration_s(experiment)``, ``valve_settings(experiment, valves)``: how long a car run lasts,
   and its valve settings (``valves``: ``circuit.valves``);
 * ``make_car(scenario)``: the car of a car kind (a picklable module-level function);
+* ``shortest_duration_s(experiment)``: how long its shortest case runs, when its cases differ
+  (optional; the faults must happen within it);
 * ``zones(experiment) -> (zone, ...)``: the track's test zones (kinds with ``zone_metrics``);
 * ``refuse_check(metric, experiment) -> reason or None``: a checkable metric the scenario's
   experiment cannot give (e.g. lateral wheel forces without wheel-rail contact);

@@ -161,17 +161,16 @@ def of_setting(ds: xr.Dataset, valves: Optional[bool]) -> xr.Dataset:
 
 
 def air_columns(case: xr.Dataset) -> Dict[str, float]:
-    """The air a case exchanged with the outside (cumulative, at its last sample) [kg]: injected
-    from the supply, exhausted by the valves, lost through the faults' openings; and the error of
-    the mass balance air(end) - air(start) - (injected - exhausted - lost), which closes to the
+    """The air a case exchanged (cumulative, at its last sample) [kg]: injected from the supply,
+    exhausted by the valves, lost through the faults' openings; and the error of the mass balance
+    air(end) - air(start) - net inflow from outside (= injected - exhausted - lost with a fixed
+    supply; a finite supply is a chamber, its air moves within), which closes to the
     integrator's round-off (the circuit holds every term as a state)."""
     m = case["total_mass_kg"].values
-    columns = {"air_injected_kg": float(case["air_from_supply_kg"].values[-1]),
-               "air_exhausted_kg": float(case["air_to_atmosphere_kg"].values[-1]) + 0.0,   # no "-0"
-               "air_lost_kg": float(case["air_lost_kg"].values[-1]) + 0.0}
-    columns["mass_balance_error_kg"] = float(m[-1] - m[0] - columns["air_injected_kg"] + columns["air_exhausted_kg"]
-                                             + columns["air_lost_kg"])
-    return columns
+    return {"air_injected_kg": float(case["air_from_supply_kg"].values[-1]),
+            "air_exhausted_kg": float(case["air_to_atmosphere_kg"].values[-1]) + 0.0,   # no "-0"
+            "air_lost_kg": float(case["air_lost_kg"].values[-1]) + 0.0,
+            "mass_balance_error_kg": float(m[-1] - m[0] - case["net_inflow_kg"].values[-1])}
 
 
 def fault_figure(scenario: Scenario, ds: xr.Dataset, suffix: str = "", valves_text: str = "") -> List[Figure]:
@@ -187,7 +186,7 @@ def fault_figure(scenario: Scenario, ds: xr.Dataset, suffix: str = "", valves_te
     links = [str(n) for n in ds["link"].values] if "link" in ds.dims else []
     named = {f.component for f in faults}
     shown = [n for n in links if n in ends and (isinstance(circuit.components.get(n), DifferentialPressureValve)
-                                                or n.split(".")[0].split("@")[0] in named)]
+                                                or n.split(".")[0] in named or named & set(ends[n]))]
     for link in shown:
         flow = ds["link_flow_kg_per_s"].sel(link=link)
         if np.all(np.isnan(flow.values)):
@@ -214,6 +213,8 @@ def fault_columns(scenario: Scenario, case: xr.Dataset) -> Dict[str, float]:
     t_fault = min(times)
     t = case["time"].values
     after, before = t >= t_fault, (t >= t_fault - BEFORE_FAULT_S) & (t < t_fault)
+    if not after.any():                               # the run stopped before the fault
+        return {}
     roll = case["roll_rel_rad"] if "roll_rel_rad" in case else case["roll_rad"]
     dqq = case["dqq_2m"] if "dqq_2m" in case else case["dqq"]
     columns = {"roll_before_fault_rad": float(np.mean(roll.values[before])) if before.any() else float("nan"),

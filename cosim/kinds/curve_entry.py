@@ -18,7 +18,16 @@ import xarray as xr
 from cosim.errors import ScenarioError
 from cosim.kinds import en14363
 from cosim.kinds.base import Kind
-from cosim.kinds.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case, simulate_cases
+from cosim.kinds.car import (
+    add_wheel_unloading,
+    air_columns,
+    bellow_panels,
+    fault_columns,
+    fault_figure,
+    of_setting,
+    per_case,
+    simulate_cases,
+)
 from cosim.kinds.comfort import comfort_columns
 from cosim.limits.assessment import STEP_M
 from cosim.limits.checks import CaseMetrics

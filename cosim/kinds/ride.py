@@ -20,6 +20,7 @@ import numpy as np
 from cosim.errors import ScenarioError
 from cosim.kinds import curve_entry
 from cosim.kinds.base import Kind
+from cosim.kinds.car import fault_columns
 from cosim.kinds.comfort import COLUMNS, comfort_columns
 from cosim.kinds.curve_entry import MAX_SPEED_M_PER_S, CurveTest, IrregularitySpec, parse_irregularity
 from cosim.limits.checks import CaseMetrics
@@ -118,6 +119,14 @@ def duration_s(ride: RideTest) -> float:
     return max(ride.settle_s, (20.0 + ride.transition_m) / min(ride.speeds_m_per_s)) + ride.record_s
 
 
+def shortest_duration_s(ride: RideTest) -> float:
+    """How long the shortest case runs [s] (the fastest speed in a curve): every fault must
+    happen within it."""
+    if ride.radius_m is None:
+        return duration_s(ride)
+    return max(ride.settle_s, (20.0 + ride.transition_m) / max(ride.speeds_m_per_s)) + ride.record_s
+
+
 def valve_settings(ride: RideTest, valves: bool) -> Tuple[bool, ...]:
     return ride.valve_settings
 
@@ -156,6 +165,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
             case = ds.isel(case=j)
             row = {"speed_m_per_s": float(v), **curve_entry.summary_row(case, curve), "record_from_s": start}
             row.update(comfort_columns(case, start))
+            row.update(fault_columns(scenario, case))
             rows.append(row)
     metrics = {m: largest(r.get(m, np.nan) for r in rows) for m in KIND.headline_metrics} if rows else {}
     for r in rows:

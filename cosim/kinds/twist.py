@@ -14,7 +14,16 @@ import xarray as xr
 
 from cosim.errors import ScenarioError
 from cosim.kinds.base import Kind
-from cosim.kinds.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case, simulate_cases
+from cosim.kinds.car import (
+    add_wheel_unloading,
+    air_columns,
+    bellow_panels,
+    fault_columns,
+    fault_figure,
+    of_setting,
+    per_case,
+    simulate_cases,
+)
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading, window_drift, window_mean
 from cosim.results.io import Progress

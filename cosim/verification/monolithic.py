@@ -141,6 +141,9 @@ class MonolithicCar:
                  newton_abs_tol: float = 1e-4, newton_rel_tol: float = 1e-8):
         if not step_s > 0:
             raise ValueError(f"step_s must be > 0, got {step_s}")
+        if any(f.t_s > 0.0 for f in getattr(scenario.circuit, "faults", ())):
+            raise ValueError("the monolithic reference integrates one circuit throughout: faults that happen "
+                             "during the run (t_s > 0) are not modelled in it")
         cosim = build_cosimulation(scenario, [float(k)], _make_car(scenario))
         self.scenario, self.k, self.step_s = scenario, float(k), float(step_s)
         self._cosim = cosim           # its sample() records the monolithic state (see sample)

@@ -116,7 +116,7 @@ def valve_circuit(fault=None):
     return (circuit.with_active_faults([0]) if fault else circuit), circuit.initial_state()
 
 
-def run_rk4(circuit, x0, z_m, t_end_s=5.0, h=1e-3):
+def run_rk4(circuit, x0, z_m, t_end_s=2.0, h=1e-3):
     f = lambda t, x: circuit.derivatives(x, np.array([z_m]), np.zeros(1))
     return rk4(f, x0, 0.0, t_end_s, round(t_end_s / h))
 
@@ -257,3 +257,42 @@ def test_bad_faults_are_refused_naming_the_field(fault, path, words):
     with pytest.raises(CircuitError) as err:
         Circuit(comps, faults=[fault])
     assert err.value.path == path and words in err.value.reason
+
+
+def test_two_openings_on_one_chamber_get_their_own_links_and_the_later_stuck_fault_wins():
+    comps = {"bellow": Bellow(p0_Pa=4.0e5), "supply": Supply(p_Pa=9.0e5), "lv": LevellingValve("bellow")}
+    faults = [Fault("burst", "bellow", 1.0, area_m2=1e-4), Fault("burst", "bellow", 2.0, area_m2=1e-4),
+              Fault("stuck_closed", "lv", 2.0), Fault("stuck_at", "lv", 1.0, lever_m=0.02)]
+    circuit = Circuit(comps, faults=faults)
+    assert circuit.link_names == ["bellow.burst[0]", "bellow.burst[1]", "lv.supply", "lv.exhaust"]
+    both = circuit.with_active_faults([0, 1, 2, 3])           # stuck at 1 s, closed at 2 s: closed
+    x0 = both.initial_state()
+    assert both.valve_air_kg(run_rk4(both, x0, 0.0, t_end_s=0.1)).supply[0] == 0.0
+    at = circuit.with_active_faults([3])
+    assert at.valve_air_kg(run_rk4(at, x0, 0.0, t_end_s=0.1)).supply[0] > 0.0
+
+
+@pytest.mark.parametrize("dp, q, flow_at_1bar", [
+    ((1.0e5, 2.0e5), (0.01, 0.02), 0.01),                   # open from its first point: unchanged
+    ((0.0, 1.0e5), (0.0, 0.0), 0.0),                        # never passes air: unchanged
+    ((0.0, 0.5e5, 1.0e5, 2.0e5), (0.0, 0.0, 0.0, 0.02), 0.02),   # dead band to 1 bar removed
+])
+def test_a_stuck_open_differential_valve_loses_only_its_dead_band(dp, q, flow_at_1bar):
+    comps = {"L": Bellow(p0_Pa=5.0e5), "R": Bellow(p0_Pa=4.0e5), "dpv": DifferentialPressureValve("L", "R", dp, q)}
+    circuit = Circuit(comps, faults=[Fault("stuck_open", "dpv")]).with_active_faults([0])
+    flow = circuit.outputs(circuit.initial_state(), np.zeros(2)).link_flow_kg_per_s[0]
+    assert flow == pytest.approx(flow_at_1bar, rel=1e-12)
+
+
+def test_the_balance_of_a_finite_supply_that_bursts():
+    """A finite main reservoir is a chamber: what it delivers moves within the circuit; its own
+    burst vents even with the supply lost (a lost supply isolates its links, not its hole)."""
+    comps = {"bellow": Bellow(p0_Pa=4.0e5), "supply": Supply(p_Pa=9.0e5, V_m3=0.1), "lv": LevellingValve("bellow")}
+    faults = [Fault("burst", "supply", area_m2=1e-5), Fault("supply_lost", "supply")]
+    circuit = Circuit(comps, k_W_per_K=math.inf, faults=faults).with_active_faults([0, 1])
+    x0 = circuit.initial_state()
+    x = run_rk4(circuit, x0, 0.03, t_end_s=1.0)
+    lost = circuit.air_lost_kg(x)
+    assert lost > 0.0 and circuit.valve_air_kg(x).supply[0] == 0.0
+    assert circuit.total_mass_kg(x) - circuit.total_mass_kg(x0) == pytest.approx(circuit.net_inflow_kg(x), abs=1e-13)
+    assert circuit.net_inflow_kg(x) == pytest.approx(-lost, rel=1e-12)
