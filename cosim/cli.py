@@ -142,6 +142,20 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("record", type=Path, help="CSV with t_s and any of ax_m_per_s2, ay_m_per_s2, az_m_per_s2 (car axes)")
     m.add_argument("--point", default=None, help="a car run's floor point (front, centre, rear): its a<x|y|z>_<point> columns")
     m.add_argument("--out", type=Path, default=None, help="output folder (default: beside the file, comfort_<its name>)")
+    i = sub.add_parser("identify", help="fit scenario keys (k first) to measured rig data, with 95 %% intervals "
+                                        "(docs/identify.md)")
+    i.add_argument("scenario", type=Path, help="a rig scenario: rig_sine or rig_ramp (time history), rig_stiffness (table)")
+    i.add_argument("--data", type=Path, default=None, help="CSV: t_s, z_m and any of F_bellow_N, p_bellow_Pa, p_tank_Pa, "
+                                                           "T_bellow_K, T_tank_K; or a stiffness table")
+    i.add_argument("--fit", default="k_W_per_K", metavar="KEY[,KEY ...]",
+                   help="the keys to fit (default k_W_per_K; others: e.g. circuit.pipe.zeta)")
+    i.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scenario value (repeatable)")
+    i.add_argument("--out", type=Path, default=None, help="output folder (default: beside the data, identify_<its name>)")
+    i.add_argument("--plan", action="store_true", help="instead of fitting: which sine frequency identifies k best")
+    i.add_argument("--k", type=float, default=10.0, help="--plan: the nominal k [W/K] (default 10)")
+    i.add_argument("--jobs", type=int, default=1, help="processes for the profiles of a fit of several keys")
+    i.add_argument("--dask", action="store_true", help="profiles on a Dask LocalCluster of --jobs workers")
     o = sub.add_parser("report", help="one self-contained HTML report of one or more runs (side by side)")
     o.add_argument("dirs", type=Path, nargs="+", help="output folders of runs, checks or verify")
     o.add_argument("--out", type=Path, default=None, help="the HTML file (default: report.html in the first folder)")
@@ -173,6 +187,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return EXIT_OK
         if args.command == "comfort":
             return _comfort(args)
+        if args.command == "identify":
+            return _identify(args)
         if args.command == "report":
             from cosim.results.report import write_report
             t0 = time.perf_counter()
@@ -384,6 +400,38 @@ def _comfort(args) -> int:
     n_mv = "—" if result.N_MV is None else f"{result.N_MV:.3f} ({result.scale})"
     print(f"N_MV {n_mv}; " + ", ".join(f"a{a.upper()}P95 {v:.4g} m/s²" for a, v in result.aP95_m_per_s2.items())
           + "; " + ", ".join(f"Wz_{a} {v:.3g}" for a, v in result.Wz.items()))
+    print(f"results in {out}/")
+    return EXIT_OK
+
+
+def _identify(args) -> int:
+    from cosim.identify.run import identify, parse_keys, plan, report, write
+    from cosim.identify.synthetic import NOISE
+    if args.plan:
+        rows = plan(args.scenario, args.k, NOISE, args.overrides)
+        valid = [r for r in rows if r["valid"]]
+        best = min(valid, key=lambda r: r["se_k_relative"]) if valid else None
+        print(f"sine of the scenario's amplitude and duration, nominal k = {args.k:g} W/K, noise "
+              + ", ".join(f"{c} {v:g}" for c, v in NOISE.items()))
+        print("frequency [Hz]   standard error of k   pipe Mach   T max [K]")
+        for r in rows:
+            note = "   <- best" if r is best else ("" if r["valid"] else "   outside the model's validity")
+            print(f"{r['frequency_Hz']:14g}   {r['se_k_relative']:19.3%}   {r['pipe_mach_max']:9.2f}   "
+                  f"{r['T_max_K']:9.1f}{note}")
+        return EXIT_OK
+    if args.data is None:
+        raise ScenarioError(args.scenario, ["--data"], "give the measured data (--data FILE.csv), or --plan")
+    if args.jobs < 1:
+        raise ScenarioError(args.scenario, ["--jobs"], f"expected at least 1, got {args.jobs}")
+    keys = parse_keys(args.fit, args.scenario)
+    executor = None
+    if len(keys) > 1:
+        from cosim.sweep.executors import make_executor
+        executor = make_executor(args.jobs, args.dask)
+    model, result = identify(args.scenario, args.data, keys, args.overrides, executor)
+    out = args.out or args.data.resolve().parent / f"identify_{args.data.stem}"
+    write(model, result, out)
+    print(report(result))
     print(f"results in {out}/")
     return EXIT_OK
 

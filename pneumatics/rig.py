@@ -118,6 +118,8 @@ class StiffnessPoint:
     floquet_max: float            # largest Floquet multiplier modulus (< 1: the orbit attracts)
     cycles_to_settle: float       # cycles for a disturbance to decay by 1e3 (from floquet_max)
     pipe_mach_max: float          # largest pipe Mach number along the orbit (see pipe_mach_number)
+    K_storage_N_per_m: float      # first harmonic of F in phase with z = a sin(wt), over a: K' (Re K*)
+    K_loss_N_per_m: float         # first harmonic in quadrature (with dz/dt), over a: K'' (Im K*)
     loop_phase: np.ndarray        # the periodic orbit, decimated: phase in [0, 1)
     loop_F_N: np.ndarray          # bellow force along it
     loop_T_K: np.ndarray          # bellow temperature along it
@@ -229,6 +231,10 @@ def _stiffness_points(circuit: Circuit, res, f: np.ndarray, k: np.ndarray, ampli
     one_period(circuit, res.x0, 1.0 / f, motion, n_steps, observe)
     F, T, M = np.array(forces), np.array(temps), np.array(mach)
     phase = np.arange(1, n_steps + 1) / n_steps
+    # complex stiffness K* = K' + i K'': F's first Fourier coefficients over the period (the n_steps
+    # samples are equally spaced in phase: the rectangle rule is exact for a trigonometric polynomial)
+    K_storage = 2.0 / n_steps * (np.sin(2 * np.pi * phase) @ F) / amplitude_m
+    K_loss = 2.0 / n_steps * (np.cos(2 * np.pi * phase) @ F) / amplitude_m
     keep = np.unique(np.linspace(0, n_steps - 1, 64).astype(int))     # 64 points per loop for the record
     out = []
     for i in range(f.size):
@@ -237,7 +243,7 @@ def _stiffness_points(circuit: Circuit, res, f: np.ndarray, k: np.ndarray, ampli
         out.append(StiffnessPoint(float(k[i]), float(f[i]), float((F[:, i].max() - F[:, i].min()) / (2 * amplitude_m)),
                                   float(F[:, i].min()), float(F[:, i].max()), float(T[:, i].mean()), float(T[:, i].max()),
                                   bool(res.stabilised[i]), float(res.residual[i]), float(fl), settle, float(M[:, i].max()),
-                                  phase[keep], F[keep, i], T[keep, i]))
+                                  float(K_storage[i]), float(K_loss[i]), phase[keep], F[keep, i], T[keep, i]))
     return out
 
 

@@ -64,6 +64,10 @@ class Kind:
     case_columns : tuple of str
         The summary columns that identify a case (a row): what ``verify`` pairs across its levels
         and ``sweep.nc`` takes as dimensions (those present in the rows).
+    identify : str
+        What ``pneumorail identify`` fits its scenarios to: ``time`` (a rig's time history) or
+        ``table`` (a dynamic-stiffness table); empty: not identifiable. Such a kind's module
+        provides ``identify_circuit(scenario) -> (components, initial pressures)``.
     """
 
     name: str
@@ -78,6 +82,7 @@ class Kind:
     plot_metrics: Tuple[str, ...] = ()
     k_fixed: str = ""
     case_columns: Tuple[str, ...] = ("valves", "k_W_per_K")
+    identify: str = ""
 
     @property
     def code(self) -> ModuleType:

@@ -111,11 +111,20 @@ class RigCircuit:
         return {n: self.p0_Pa for n, c in components.items() if isinstance(c, (Bellow, Tank))}
 
 
+def identify_circuit(scenario: Scenario):
+    """(components, initial pressures) of the rig ``pneumorail identify`` drives: with the tank
+    when the scenario has one (a ramp scenario: as its first configuration says)."""
+    rig = scenario.circuit
+    with_tank = rig.tank is not None and (scenario.kind != "rig_ramp" or scenario.test.configurations[0] == "bellow_tank")
+    comps = rig.components(with_tank)
+    return comps, rig.initial_pressures(comps)
+
+
 # ----------------------------------------------------------------------------------- the kinds
 KINDS = (
-    Kind("rig_ramp", "test", RampTest, __name__),
-    Kind("rig_sine", "test", SineTest, __name__),
-    Kind("rig_stiffness", "test", StiffnessTest, __name__),
+    Kind("rig_ramp", "test", RampTest, __name__, identify="time"),
+    Kind("rig_sine", "test", SineTest, __name__, identify="time"),
+    Kind("rig_stiffness", "test", StiffnessTest, __name__, identify="table"),
     Kind("rig_table2", "test", QuasiStaticTest, __name__,
          k_fixed="Table 2 is computed for the adiabatic and isothermal limits"),
 )
