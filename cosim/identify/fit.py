@@ -182,7 +182,7 @@ def fit_k(model: RigModel, grid_points: int = 25) -> Identification:
     est = Estimate(K_KEY, k_of(best), float(se), float(k_of(lo)), float(k_of(hi)), limit)
     ts, S = g.cost(sigma)
     profile = Profile(K_KEY, np.array([k_of(t) for t in ts]), S - S_best)
-    warnings = _warnings([est])
+    warnings = _warnings([est]) + _missing(g.pred[best])
     return Identification([est], np.ones((1, 1)), sigma, S_best, data.n, g.pred[best], [profile], warnings,
                           g.calls, time.perf_counter() - t0)
 
@@ -255,6 +255,14 @@ def _interval(g: _KGrid, sigma, best: float, S_best: float, curvature: float = m
             break
         g.run(todo)
     return ends.get(-1, -math.inf), ends.get(1, math.inf)
+
+
+def _missing(pred: Dict[str, np.ndarray]) -> List[str]:
+    """A warning for the points the model could not give at the optimum (a periodic state that
+    did not stabilise): they are left out of the cost."""
+    n = max(int(np.sum(~np.isfinite(v))) for v in pred.values())
+    return [f"the model gives no value at {n} point(s) (a periodic state that did not stabilise, near the pipe "
+            f"resonance): left out of the fit"] if n else []
 
 
 def _warnings(estimates: Sequence[Estimate]) -> List[str]:
