@@ -154,7 +154,8 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--out", type=Path, default=None, help="output folder (default: beside the data, identify_<its name>)")
     i.add_argument("--plan", action="store_true", help="instead of fitting: which sine frequency identifies k best")
     i.add_argument("--k", type=float, default=10.0, help="--plan: the nominal k [W/K] (default 10)")
-    i.add_argument("--jobs", type=int, default=1, help="processes for the profiles of a fit of several keys")
+    i.add_argument("--jobs", type=int, default=2, help="processes: a stiffness table's frequencies, the profiles of "
+                                                       "a fit of several keys (default 2)")
     i.add_argument("--dask", action="store_true", help="profiles on a Dask LocalCluster of --jobs workers")
     o = sub.add_parser("report", help="one self-contained HTML report of one or more runs (side by side)")
     o.add_argument("dirs", type=Path, nargs="+", help="output folders of runs, checks or verify")
@@ -428,7 +429,7 @@ def _identify(args) -> int:
     if len(keys) > 1:
         from cosim.sweep.executors import make_executor
         executor = make_executor(args.jobs, args.dask)
-    model, result = identify(args.scenario, args.data, keys, args.overrides, executor)
+    model, result = identify(args.scenario, args.data, keys, args.overrides, executor, args.jobs)
     out = args.out or args.data.resolve().parent / f"identify_{args.data.stem}"
     write(model, result, out)
     print(report(result))

@@ -191,19 +191,23 @@ def fit_k(model: RigModel, grid_points: int = 25) -> Identification:
 NEWTON_D = 0.01
 
 
-def _newton(g: _KGrid, sigma, best: float, iterations: int = 4, tol: float = 1e-4) -> float:
+def _newton(g: _KGrid, sigma, best: float, iterations: int = 5, tol_se: float = 0.1) -> float:
     """Newton steps on S(theta) from ``best``, each from a three-point stencil (one batch): S is
-    not quadratic in theta over the coarse grid's spacing, its parabola only gets close."""
+    not quadratic in theta over the coarse grid's spacing, its parabola only gets close. Stops,
+    without moving, once the next step would be below ``tol_se`` standard errors of theta
+    (sqrt(2 / S'')): the optimum is then known far better than the data know it."""
     d = NEWTON_D
     for _ in range(iterations):
         g.run([best - d, best, best + d])
         Sm, S0, Sp = (sum(g.sse[t][c] / sigma[c] ** 2 for c in sigma) for t in (best - d, best, best + d))
-        curvature = Sp - 2 * S0 + Sm
-        step = -0.5 * d * (Sp - Sm) / curvature if curvature > 0 else (d if Sp < Sm else -d)
-        step = float(np.clip(step, -4 * d, 4 * d))
-        best = float(np.clip(best + step, THETA_LO, THETA_HI))
-        if abs(step) < tol:
-            break
+        curvature = (Sp - 2 * S0 + Sm) / d ** 2
+        if curvature > 0:
+            step = -0.5 * (Sp - Sm) / d / curvature
+            if abs(step) < tol_se * math.sqrt(2.0 / curvature):
+                break
+        else:
+            step = d if Sp < Sm else -d
+        best = float(np.clip(best + float(np.clip(step, -4 * d, 4 * d)), THETA_LO, THETA_HI))
     g.run([best - d, best, best + d])
     return best
 

@@ -6,7 +6,7 @@ scenario's ``p0_Pa``, with the package's fixed-step RK4 at most :data:`STEP_S` (
 resolves the thermal rate of the largest finite k: :func:`pneumatics.integrate.stable_step_s`),
 sampled at the measured times. A stiffness table is predicted on the periodic steady state at
 each measured frequency (:func:`pneumatics.rig.dynamic_stiffness_sweep`, the complex stiffness of
-the force's first harmonic).
+the force's first harmonic), the frequencies shared over ``jobs`` processes.
 
 Every k value of a call is one column of one batched circuit, so a grid of k costs about what one
 k costs; the other keys (``circuit.pipe.zeta`` ...) are applied through the scenario loader, a
@@ -14,6 +14,7 @@ circuit per value.
 """
 from __future__ import annotations
 
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, Sequence, Tuple
@@ -48,8 +49,11 @@ class RigModel:
     scenario_file: Path
     overrides: Tuple[str, ...]
     data: Measurements
+    #: processes a stiffness table's frequencies are shared over (a pool kept for the model's life)
+    jobs: int = 1
 
     def __post_init__(self):
+        self._pool = None
         from cosim.kinds import KINDS
         self.base = load_scenario(self.scenario_file, list(self.overrides))
         self.kind = KINDS[self.base.kind]
@@ -122,7 +126,14 @@ class RigModel:
 
     def _table(self, comps, p0, ks, amplitude_m) -> Dict[str, np.ndarray]:
         f = self.data.x
-        points = dynamic_stiffness_sweep(comps, ks, f, amplitude_m, p0)
+        shares = [f[i::self.jobs] for i in range(min(self.jobs, f.size))]   # alternate: equal costs
+        if len(shares) == 1:
+            points = dynamic_stiffness_sweep(comps, ks, f, amplitude_m, p0)
+        else:
+            if self._pool is None:
+                self._pool = ProcessPoolExecutor(len(shares))
+            tasks = [self._pool.submit(dynamic_stiffness_sweep, comps, ks, share, amplitude_m, p0) for share in shares]
+            points = [p for task in tasks for p in task.result()]
         at = {(p.k_W_per_K, p.frequency_Hz): p for p in points}
         Ks, Kl = np.full((ks.size, f.size), np.nan), np.full((ks.size, f.size), np.nan)
         for i, k in enumerate(ks):

@@ -41,10 +41,11 @@ def parse_keys(text: str, scenario_file) -> List[str]:
 
 
 def identify(scenario_file: Path, data_file: Path, keys: Sequence[str], overrides: Sequence[str] = (),
-             executor=None) -> tuple[RigModel, Identification]:
-    """Read, check (before anything is simulated) and fit."""
+             executor=None, jobs: int = 1) -> tuple[RigModel, Identification]:
+    """Read, check (before anything is simulated) and fit (a stiffness table's frequencies on
+    ``jobs`` processes)."""
     data = read_measurements(data_file)
-    model = RigModel(Path(scenario_file), tuple(overrides), data)
+    model = RigModel(Path(scenario_file), tuple(overrides), data, jobs)
     params = searched(model, keys)                            # every key checked before the first simulation
     if list(keys) == [K_KEY]:
         return model, fit_k(model)
