@@ -36,6 +36,8 @@ from cosim.identify.model import RigModel
 
 K_KEY = "k_W_per_K"
 THETA_LO, THETA_HI = -2.0, 4.0
+#: where a joint fit starts k [W/K]: mid-range on the log scale of the paper's values (0 ... 10^4)
+K_START_W_PER_K = 10.0
 #: chi-square quantile, 1 degree of freedom, 95 %
 CHI2_95 = 3.841458820694124
 #: an interval wider than this (decades of the parameter) draws the warning that the data do
@@ -46,7 +48,8 @@ WIDE_DECADES = 2.0
 @dataclass
 class Estimate:
     """One parameter: estimate, standard error (NaN at a limit), 95 % profile interval
-    (``ci_low``/``ci_high``; 0 or inf for a one-sided one), ``limit`` ('0', 'inf' or '')."""
+    (``ci_low``/``ci_high``; 0 or inf for a one-sided one), ``limit``: '0' or 'inf' (k at a
+    limit), 'bound' (a joint fit's estimate at its search bound) or ''."""
 
     key: str
     value: float
@@ -285,24 +288,26 @@ def _warnings(estimates: Sequence[Estimate]) -> List[str]:
 # ------------------------------------------------------------------------- several parameters
 @dataclass(frozen=True)
 class Searched:
-    """A key searched in log10 between ``lo`` and ``hi`` (log10 of its bounds)."""
+    """A key searched in log10 between ``lo`` and ``hi`` (log10 of its bounds), from ``start``."""
 
     key: str
     lo: float
     hi: float
+    start: float
 
 
 def searched(model: RigModel, keys: Sequence[str]) -> List[Searched]:
-    """k over [THETA_LO, THETA_HI]; any other key within a factor 100 of the scenario's value,
-    clipped to its valid range (cosim.scenario.schema)."""
+    """k over [THETA_LO, THETA_HI] from K_START_W_PER_K; any other key within a factor 100 of the
+    scenario's value (its start), clipped to its valid range (cosim.scenario.schema)."""
     from cosim.identify.keys import key_value_and_range
     out = []
     for key in keys:
         if key == K_KEY:
-            out.append(Searched(key, THETA_LO, THETA_HI))
+            out.append(Searched(key, THETA_LO, THETA_HI, math.log10(K_START_W_PER_K)))
             continue
         value, lo, hi = key_value_and_range(model, key)
-        out.append(Searched(key, math.log10(max(value / 100.0, lo)), math.log10(min(value * 100.0, hi))))
+        out.append(Searched(key, math.log10(max(value / 100.0, lo)), math.log10(min(value * 100.0, hi)),
+                            math.log10(value)))
     return out
 
 
@@ -325,14 +330,11 @@ def _residuals(model: RigModel, params, u, sigma, fixed: Optional[Tuple[int, flo
 
 
 def fit_joint(model: RigModel, params: Sequence[Searched], executor=None) -> Identification:
-    """Several keys at once (k first if fitted), by least squares from the k-alone optimum."""
+    """Several keys at once (k first if fitted), by least squares from each key's start
+    (:func:`searched`)."""
     t0 = time.perf_counter()
     data = model.data
-    u0 = np.array([0.5 * (p.lo + p.hi) if p.key != K_KEY else 1.0 for p in params])
-    for i, p in enumerate(params):
-        if p.key != K_KEY:
-            from cosim.identify.keys import key_value_and_range
-            u0[i] = math.log10(key_value_and_range(model, p.key)[0])
+    u0 = np.array([p.start for p in params])
     lo, hi = np.array([p.lo for p in params]), np.array([p.hi for p in params])
     sigma = {c: float(np.std(v)) or 1.0 for c, v in data.channels.items()}
     calls = 0

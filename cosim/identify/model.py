@@ -76,6 +76,12 @@ class RigModel:
         if self.data.kind == "time":
             self._spline = make_interp_spline(self.data.x, self.data.z_m, k=SPLINE_DEGREE)
 
+    def close(self) -> None:
+        """Shut down the processes a stiffness table's predictions ran on (none for a time history)."""
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
+
     def components(self, others: Others):
         """(components, initial pressures) of the rig with ``others`` applied."""
         if others not in self._cache:

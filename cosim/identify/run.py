@@ -47,9 +47,10 @@ def identify(scenario_file: Path, data_file: Path, keys: Sequence[str], override
     data = read_measurements(data_file)
     model = RigModel(Path(scenario_file), tuple(overrides), data, jobs)
     params = searched(model, keys)                            # every key checked before the first simulation
-    if list(keys) == [K_KEY]:
-        return model, fit_k(model)
-    return model, fit_joint(model, params, executor)
+    try:
+        return model, (fit_k(model) if list(keys) == [K_KEY] else fit_joint(model, params, executor))
+    finally:
+        model.close()
 
 
 def _sha256(path: Path) -> str:
@@ -113,7 +114,7 @@ def _text(e) -> str:
 
 def report(result: Identification) -> str:
     """The result as text for the terminal."""
-    lines = [_text(e) + ("" if not e.limit == "bound" else "  [at the search bound]") for e in result.estimates]
+    lines = [_text(e) + ("  [at the search bound]" if e.limit == "bound" else "") for e in result.estimates]
     if len(result.estimates) > 1:
         keys = [e.key for e in result.estimates]
         lines.append("correlation: " + "; ".join(f"{a} / {b}: {result.correlation[i, j]:+.3f}" for i, a in enumerate(keys)
