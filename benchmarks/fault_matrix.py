@@ -4,6 +4,7 @@ a test; tests/pneumatics/test_faults.py and tests/cosim/test_faults.py check the
     python benchmarks/fault_matrix.py                      # every fault, t = 8 s (in the arc)
     python benchmarks/fault_matrix.py --t 0                # every fault from the start
     python benchmarks/fault_matrix.py --only burst_FR --set curve.cant_rad=0.1
+    python benchmarks/fault_matrix.py --only burst_FR --kinematic --set curve.radius_m=300
 
 Each case is ``scenarios/curve_burst.yaml`` (contact curve entry, R = 100 m, 10 m/s, the car with
 emergency springs, k = 0 and inf in one run) cut to 20 s, with its burst replaced by the fault of
@@ -51,12 +52,30 @@ def case_overrides(fields, t_s: float, valves) -> list:
     return out
 
 
+def _kinematic_copy() -> Path:
+    """curve_burst.yaml with kinematic guidance: the contact model's keys and checks removed."""
+    import tempfile
+
+    import yaml
+    data = yaml.safe_load(SCENARIO.read_text())
+    for key in ("friction_coefficient", "nadal_flange_angle_deg", "nadal_friction", "prudhomme_alpha"):
+        data["curve"].pop(key, None)
+    data["curve"]["guidance"] = "kinematic"
+    data["checks"] = []
+    path = Path(tempfile.mkdtemp(prefix="fault_matrix_")) / SCENARIO.name
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--t", type=float, default=8.0, help="when the fault happens [s] (default 8: in the arc)")
     ap.add_argument("--only", action="append", choices=sorted(FAULTS), help="run only these rows")
     ap.add_argument("--set", action="append", default=[], help="further overrides (key.path=value)")
+    ap.add_argument("--kinematic", action="store_true",
+                    help="kinematic guidance (the scenario's contact-model keys dropped): no Y/Q")
     args = ap.parse_args(argv)
+    scenario_file = _kinematic_copy() if args.kinematic else SCENARIO
     names = args.only or list(FAULTS)
     print(f"{'fault':26s} {'valves':6s} {'k':>4s} {'outcome':8s} {'dqq_2m':>7s} {'yq_2m':>6s} {'roll':>7s} "
           f"{'lost g':>7s} {'inj g':>7s} {'balance kg':>10s}  wall")
@@ -65,7 +84,7 @@ def main(argv=None) -> int:
         fields, needs_valves = FAULTS[name]
         valves = (True,) if needs_valves else (False, True)
         t0 = time.perf_counter()
-        scenario = load_scenario(SCENARIO, case_overrides(fields, args.t, valves) + args.set)
+        scenario = load_scenario(scenario_file, case_overrides(fields, args.t, valves) + args.set)
         outcome = run(scenario)
         wall = time.perf_counter() - t0
         for row in outcome.rows:
