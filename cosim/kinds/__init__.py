@@ -6,6 +6,7 @@ it draws, its metrics and what ``compare`` overlays (:class:`~cosim.kinds.base.K
 * :mod:`cosim.kinds.twist`: the EN 14363 twist test (paper §4.1): ``twist``;
 * :mod:`cosim.kinds.curve_entry`: a run into a curve (paper §4.2): ``curve_entry``;
 * :mod:`cosim.kinds.ride`: ride comfort on irregular track at a list of speeds: ``ride``;
+* :mod:`cosim.kinds.stability`: linear running stability (eigenvalues, critical speed): ``stability``;
 * :mod:`cosim.kinds.car`: what the car kinds share (the co-simulated cases, their Dataset);
 * :mod:`cosim.kinds.en14363`: the EN 14363 assessment of a car run on track (zones, statistics,
   limits), for the kinds that run on a track;
@@ -17,11 +18,11 @@ from __future__ import annotations
 
 from typing import Callable, Dict
 
-from cosim.kinds import curve_entry, ride, rig, twist
+from cosim.kinds import curve_entry, ride, rig, stability, twist
 from cosim.kinds.base import Kind
 
 #: kind name (``kind:`` in a scenario) -> its declaration
-KINDS: Dict[str, Kind] = {k.name: k for k in (*rig.KINDS, twist.KIND, curve_entry.KIND, ride.KIND)}
+KINDS: Dict[str, Kind] = {k.name: k for k in (*rig.KINDS, twist.KIND, curve_entry.KIND, ride.KIND, stability.KIND)}
 
 
 def overlays() -> Dict[str, Callable]:

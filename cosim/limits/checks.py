@@ -1,8 +1,9 @@
 """Limits on results: evaluate the scenario's checks (:mod:`cosim.scenario.checks`) on the cases
 of a run, report PASS/FAIL with the case that gave the value.
 
-A check is about the largest value of a metric over the cases (k value x valve setting) and
-wheels its selectors leave; a NaN among them (a diverged case) fails it.
+A check is about the worst value of a metric over the cases (k value x valve setting) and
+wheels its selectors leave -- the largest for an upper limit, the smallest for a lower one; a NaN
+among them (a diverged case) fails it.
 """
 from __future__ import annotations
 
@@ -43,7 +44,8 @@ class CaseMetrics:
 
 
 def check_value(check: Check, cases: Sequence[CaseMetrics], totals: Dict[str, float] = None) -> Tuple[float, str]:
-    """The value a check is about -- the largest over the cases and wheels its selectors leave
+    """The value a check is about -- the worst over the cases and wheels its selectors leave (the
+    largest for an upper limit, the smallest for a lower one, :attr:`Check.lower_limit`)
     (NaN if one of them is NaN: a diverged case fails every check that includes it) -- and where
     it was found (e.g. ``k = 0, valves off, wheel 3R``). Without cases, a check without
     selectors is evaluated on ``totals``."""
@@ -57,7 +59,7 @@ def check_value(check: Check, cases: Sequence[CaseMetrics], totals: Dict[str, fl
     if any(math.isnan(v) for v, _, _ in found):
         v, case, w = next(f for f in found if math.isnan(f[0]))
     else:
-        v, case, w = max(found, key=lambda f: f[0])
+        v, case, w = (min if check.lower_limit else max)(found, key=lambda f: f[0])
     where = [f"k = {k_label(case.k)}"]
     if len({c.valves for c in cases}) > 1 or check.valves is not None:
         where.append(f"valves {'on' if case.valves else 'off'}")

@@ -18,8 +18,9 @@ class Check:
     """A threshold on a summary metric, e.g. ``dqq_max <= 0.6``, optionally for one wheel, one k,
     one valve setting and one test zone of the track: ``dqq_max[3R] <= 0.6``,
     ``dqq_qs_max[k=0, valves=on] <= 0.6``, ``yq_2m_p9985[zone=R<250] <= 1.2``. The value checked
-    is the largest over the cases (k, valve setting), wheels and zones the selectors leave (no
-    selector: over all of them)."""
+    is the worst over the cases (k, valve setting), wheels and zones the selectors leave (no
+    selector: over all of them): the largest for an upper limit (``<=``, ``<``), the smallest for
+    a lower one (``>=``, ``>``, e.g. ``critical_speed_m_per_s >= 30``)."""
 
     metric: str
     op: str
@@ -33,6 +34,11 @@ class Check:
     def holds(self, value: float) -> bool:
         return {"<=": value <= self.limit, "<": value < self.limit, ">=": value >= self.limit,
                 ">": value > self.limit}[self.op]
+
+    @property
+    def lower_limit(self) -> bool:
+        """A lower limit (``>=``, ``>``): the smallest value is the one that decides."""
+        return self.op in (">=", ">")
 
     def selects(self, k: float, valves: bool) -> bool:
         """Whether the case (k, valve setting) is one the check is about."""

@@ -1,0 +1,319 @@
+"""Running stability (kind ``stability``, section ``stability``, :class:`StabilityTest`): the car with
+wheel-rail contact on straight, ideal track, linearised together with its air circuit about steady
+running (:mod:`cosim.stability`), at a list of speeds, for each k and valve setting.
+
+Per case (k x valve setting x airspring model) a summary row: the linear critical speed (where
+the least damped mode's damping ratio crosses zero, bisection to ``resolution_m_per_s``), the mode
+that loses its damping and its frequency there, the least damping ratio over the speeds, and the
+carbody modes' frequencies and damping ratios at ``reference_speed_m_per_s``. Two airspring
+models: ``circuit`` (the air's states in the eigenvalue problem) and ``static`` (each airspring a
+spring of its static stiffness, the usual reduced model; its k decides isothermal or adiabatic).
+The table ``modes.csv`` lists every mode below ``max_frequency_Hz`` at every speed. Figures: the
+root locus with speed as the parameter and the damping ratio of each mode family against speed.
+
+The wheel-rail contact: the S1002 / UIC60 1:40 table (default), a cone of ``conicity`` on
+knife-edge rails (:meth:`~vehicle.wheelrail.geometry.ContactTable.cone`), or ``wheel_profile``, a
+wheel profile file (SIMPACK .prw or two columns) on the UIC60 rail, the table derived as for the
+default pair.
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from cosim.errors import ScenarioError
+from cosim.kinds.base import Kind
+from cosim.limits.checks import CaseMetrics
+from cosim.results.io import Progress
+from cosim.results.outcome import Outcome
+from cosim.results.plots import Curve, Figure, Panel, k_legend
+from cosim.scenario.model import Scenario
+from cosim.scenario.schema import Range, build, check_valve_settings, positive
+from vehicle.params import ContactParams, VehicleParams
+
+#: the carbody's modes reported per case, as the mode labels name them
+BODY_MODES = ("carbody bounce", "carbody pitch", "carbody yaw", "carbody lower sway", "carbody upper sway")
+#: airspring models of a case: the air in the eigenvalue problem, or each airspring its static stiffness
+AIRSPRINGS = ("circuit", "static")
+#: the frequency at which the static stiffness is read [rad/s]: far below every thermal and flow
+#: time constant of the circuits (hours), far above the neutral air-mass mode (0)
+STATIC_OMEGA_RAD_PER_S = 1e-6
+
+
+@dataclass(frozen=True)
+class StabilityTest:
+    """Linear running stability on straight, ideal track at each of ``speeds_m_per_s``.
+    ``resolution_m_per_s``: the bisection's final bracket of the critical speed.
+    ``reference_speed_m_per_s``: where the carbody modes are reported (default: the first speed).
+    ``max_frequency_Hz``: modes above it (the wheelsets on their contacts, ~30-300 Hz) are left
+    out of ``modes.csv`` and the figures, not out of the critical speed. ``conicity`` (a cone on
+    knife-edge rails) or ``wheel_profile`` (a file, relative to the scenario, on the UIC60 rail):
+    the wheel-rail pair instead of S1002 / UIC60 1:40. ``contact_smoothing_mm``: the contact
+    table's smoothing (null: 0.1 mm). ``valve_settings``: as a curve's."""
+
+    speeds_m_per_s: Tuple[float, ...] = tuple(float(v) for v in range(5, 101, 5))
+    resolution_m_per_s: float = 0.1
+    reference_speed_m_per_s: Optional[float] = None
+    max_frequency_Hz: float = 20.0
+    conicity: Optional[float] = None
+    wheel_profile: Optional[str] = None
+    contact_smoothing_mm: Optional[float] = None
+    valve_settings: Tuple[bool, ...] = (False,)
+
+    FIELD_RANGES = {
+        "speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most; > 0 (creepages are relative to V)"),
+        "resolution_m_per_s": Range(1e-3, 10.0, unit="m/s", why="the bisection's final bracket"),
+        "reference_speed_m_per_s": Range(0.0, 100.0, False, True, "m/s"),
+        "max_frequency_Hz": positive("Hz"),
+        "conicity": Range(0.0, 0.8, False, True, "", "equivalent conicities of wheels in service: 0.01-0.6"),
+        "contact_smoothing_mm": Range(0.0, 1.0, unit="mm", why="0: the rigid table; 1 mm blurs the flange itself"),
+    }
+    FIELD_LIST_RULES = {"speeds_m_per_s": (True, True), "valve_settings": (True, True)}
+
+    @property
+    def reference_speed(self) -> float:
+        return self.reference_speed_m_per_s if self.reference_speed_m_per_s is not None else self.speeds_m_per_s[0]
+
+
+def parse(data, vehicle: VehicleParams, path: Path) -> StabilityTest:
+    test = build(StabilityTest, data, path, ["stability"])
+    check_valve_settings(test.valve_settings, path, ["stability", "valve_settings"])
+    if test.conicity is not None and test.wheel_profile is not None:
+        raise ScenarioError(path, ["stability", "wheel_profile"], "give either conicity (a cone) or wheel_profile "
+                                                                   "(a profile file), not both")
+    if test.wheel_profile is not None:
+        file = Path(path).parent / test.wheel_profile
+        if not file.is_file():
+            raise ScenarioError(path, ["stability", "wheel_profile"], f"the wheel profile {str(file)!r} does not exist")
+        test = _replace(test, wheel_profile=str(file))
+    return test
+
+
+def _replace(test: StabilityTest, **changes) -> StabilityTest:
+    import dataclasses
+    return dataclasses.replace(test, **changes)
+
+
+def duration_s(test: StabilityTest) -> float:
+    """The analysis integrates nothing: a nominal second, so that the solver's steps pass their checks."""
+    return 1.0
+
+
+def valve_settings(test: StabilityTest, valves: bool) -> Tuple[bool, ...]:
+    return test.valve_settings
+
+
+def extra_files(test: StabilityTest) -> Tuple[Path, ...]:
+    return (Path(test.wheel_profile),) if test.wheel_profile else ()
+
+
+def refuse_check(metric: str, test: StabilityTest) -> Optional[str]:
+    return None
+
+
+def contact_table_csv(test: StabilityTest, vehicle: VehicleParams) -> str:
+    """The contact table the test asks for, as a CSV file (kept in the temporary folder under its
+    content's hash); "" for the default S1002 / UIC60 table."""
+    from vehicle.wheelrail.geometry import DEFAULT_RAIL, ContactTable  # exudyn-free, but heavy
+    r0 = float(vehicle.wheel_radius_m)
+    if test.conicity is not None:
+        table = ContactTable.cone(test.conicity, r0_m=r0)
+    elif test.wheel_profile is not None:
+        table = ContactTable.from_profiles(test.wheel_profile, DEFAULT_RAIL, gauge_m=1.435, inclination=1.0 / 40.0,
+                                           rail_profile_inclined=True, flange_back_distance_m=1.360,
+                                           flange_back_pos_mm=-70.0, nominal_radius_m=r0, tape_circle_y_mm=0.0,
+                                           gauge_height_mm=14.0, y_max_mm=12.0, dy_mm=0.1)
+    else:
+        return ""
+    text = table.to_csv()
+    file = Path(tempfile.gettempdir()) / "pneumorail_tables" / f"{hashlib.sha256(text.encode()).hexdigest()[:16]}.csv"
+    file.parent.mkdir(parents=True, exist_ok=True)
+    if not file.exists():
+        file.write_text(text)
+    return str(file)
+
+
+def contact_params(test: StabilityTest, vehicle: VehicleParams) -> ContactParams:
+    given = {} if test.contact_smoothing_mm is None else {"table_smoothing_mm": test.contact_smoothing_mm}
+    return ContactParams(table_csv=contact_table_csv(test, vehicle), **given)
+
+
+def make_car(scenario: Scenario, speed_m_per_s: Optional[float] = None, contact: Optional[ContactParams] = None):
+    """The car running on straight, ideal track with wheel-rail contact at ``speed_m_per_s``
+    (default: the first speed)."""
+    from vehicle.car import MetroCar  # exudyn: imported when a car is built, not to read a scenario
+    test = scenario.stability
+    v = test.speeds_m_per_s[0] if speed_m_per_s is None else speed_m_per_s
+    return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, speed_m_per_s=float(v),
+                    guidance="contact", contact=contact or contact_params(test, scenario.vehicle),
+                    track_structure=scenario.track)
+
+
+def static_stiffness_N_per_m(air) -> np.ndarray:
+    """Each airspring's static stiffness [N/m] from the circuit's linearisation: the real part of
+    its dynamic stiffness G_z + G_x (i w - A)^-1 (B_z + i w B_zd) at w = :data:`STATIC_OMEGA_RAD_PER_S`
+    (isothermal for k > 0, adiabatic for k = 0, with whatever volume stays connected)."""
+    w = STATIC_OMEGA_RAD_PER_S
+    n = air.A.shape[0]
+    K = air.G_z + air.G_x @ np.linalg.solve(1j * w * np.eye(n) - air.A, air.B_z + 1j * w * air.B_zd)
+    return np.real(np.diag(K))
+
+
+class _Cars:
+    """The car's linearisation at each speed, computed once (it does not depend on k)."""
+
+    def __init__(self, scenario: Scenario, F0, K_b, contact: ContactParams):
+        self.scenario, self.F0, self.K_b, self.contact = scenario, F0, np.asarray(K_b, float), contact
+        self._done: Dict[float, object] = {}
+
+    def __call__(self, v: float):
+        from vehicle.car.linear import linearise_car
+        key = round(float(v), 9)
+        if key not in self._done:
+            car = make_car(self.scenario, key, self.contact)
+            self._done[key] = linearise_car(car, self.F0, self.K_b)
+        return self._done[key]
+
+
+def _air(scenario: Scenario, valves: bool, k: float, F0):
+    """The circuit of one k and valve setting, linearised about the static state."""
+    from pneumatics.layouts import static_pressures
+    from pneumatics.linear import linearise_circuit
+    variant = scenario.with_valves(valves)
+    circuit = variant.circuit.compile(k)
+    x0 = circuit.initial_state(static_pressures(variant.circuit.components(), F0, circuit.atmosphere.p_Pa))
+    return linearise_circuit(circuit, x0)
+
+
+def _body_columns(modes) -> Dict[str, float]:
+    """Frequency and damping ratio of each carbody mode (the least damped of each label)."""
+    out = {}
+    for name in BODY_MODES:
+        found = [m for m in modes if m.label == name]
+        key = name.replace("carbody ", "").replace(" ", "_")
+        m = min(found, key=lambda m: m.damping_ratio) if found else None
+        out[f"f_{key}_Hz"] = m.frequency_Hz if m else math.nan
+        out[f"zeta_{key}"] = m.damping_ratio if m else math.nan
+    return out
+
+
+def run(scenario: Scenario, progress: Progress) -> Outcome:
+    from cosim.stability import critical_speed, scan_speeds
+    t0 = time.perf_counter()
+    test = scenario.stability
+    contact = contact_params(test, scenario.vehicle)
+    speeds = sorted(set(test.speeds_m_per_s) | {test.reference_speed})
+    progress(f"linear stability at {len(speeds)} speeds ({speeds[0]:g}-{speeds[-1]:g} m/s), "
+             f"{len(scenario.k_W_per_K)} k values x valves {test.valve_settings}")
+    probe = make_car(scenario, speeds[0], contact)
+    F0 = probe.static_bellow_forces_N()
+    table = probe.contact_table
+    rows, mode_rows = [], []
+    circuit_cars = None
+    for valves in test.valve_settings:
+        for k in scenario.k_W_per_K:
+            air = _air(scenario, valves, k, F0)
+            if circuit_cars is None:                   # the frozen-air stiffness: the same for every k
+                circuit_cars = _Cars(scenario, F0, np.diag(air.G_z), contact)
+            for model in AIRSPRINGS:
+                cars = circuit_cars if model == "circuit" else _Cars(scenario, F0, static_stiffness_N_per_m(air), contact)
+                coupled_air = air if model == "circuit" else None
+                scan = scan_speeds(cars, coupled_air, speeds)
+                v_crit, bracket, note = critical_speed(cars, coupled_air, scan, test.resolution_m_per_s)
+                progress(f"valves {'on' if valves else 'off'}, k = {k:g} W/K, airsprings {model}: {note}")
+                row = {"valves": bool(valves), "k_W_per_K": float(k), "airspring": model}
+                row.update(_critical_columns(cars, coupled_air, scan, v_crit, bracket, note))
+                ref = scan.modes[speeds.index(test.reference_speed)]
+                row.update(_body_columns(ref))
+                rows.append(row)
+                for v, ms in zip(scan.speeds_m_per_s, scan.modes):
+                    for m in ms:
+                        if abs(m.eigenvalue) <= 2.0 * math.pi * test.max_frequency_Hz:
+                            mode_rows.append({"valves": bool(valves), "k_W_per_K": float(k), "airspring": model,
+                                              "speed_m_per_s": float(v), "mode": m.label,
+                                              "frequency_Hz": m.frequency_Hz, "damping_ratio": m.damping_ratio,
+                                              "real_per_s": m.eigenvalue.real, "imag_per_s": m.eigenvalue.imag})
+    cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r[m] for m in KIND.check_metrics})
+             for r in rows if r["airspring"] == "circuit"]
+    metrics = {"critical_speed_m_per_s": min(r["critical_speed_m_per_s"] for r in rows if r["airspring"] == "circuit"),
+               "min_damping_ratio": min(r["min_damping_ratio"] for r in rows if r["airspring"] == "circuit")}
+    info = {"contact_table": contact.table_csv or "S1002 / UIC60 1:40 (shipped)",
+            "conicity_at_centre": _centre_conicity(table),
+            "equivalent_conicity_3mm": float(table.equivalent_conicity(0.003)),
+            "speeds_m_per_s": speeds}
+    shown = ("valves", "k_W_per_K", "airspring", "critical_speed_m_per_s", "critical_mode", "critical_frequency_Hz",
+             "min_damping_ratio", "f_lower_sway_Hz", "zeta_lower_sway", "f_yaw_Hz", "zeta_yaw")
+    return Outcome(scenario, rows, shown, {}, metrics, cases, [], [], info, time.perf_counter() - t0,
+                   tables={"modes": mode_rows})
+
+
+def _centre_conicity(table) -> float:
+    """(r_L - r_R) / (2 y) of the table at y = +-0.1 mm: the conicity a linearisation about the
+    centred wheelset sees (before the contact law's smoothing)."""
+    y = 1e-4
+    return float(np.mean([table.delta_r(s * y) / (2.0 * s * y) for s in (1.0, -1.0)]))
+
+
+def _critical_columns(cars, air, scan, v_crit, bracket, note) -> Dict[str, object]:
+    """The critical speed's columns of a summary row (see :func:`run`)."""
+    from cosim.stability import couple, modes
+    from cosim.stability.critical import least_damped
+    lowest = min((m.damping_ratio for ms in scan.modes for m in ms), default=math.nan)
+    out = {"min_damping_ratio": lowest, "critical_note": note}
+    if v_crit is None:
+        below = math.isnan(bracket[0])
+        out.update(critical_speed_m_per_s=(bracket[1] if below else math.inf), critical_mode="",
+                   critical_frequency_Hz=math.nan)
+        return out
+    m = least_damped(modes(couple(cars(bracket[1]), air)))
+    out.update(critical_speed_m_per_s=v_crit, critical_mode=m.label, critical_frequency_Hz=m.frequency_Hz)
+    return out
+
+
+def figures(outcome: Outcome) -> List[Figure]:
+    """Per valve setting and airspring model, a row per k: the root locus over the speeds (each
+    mode family's least damped mode, frequency against real part, the points at the scan's speeds)
+    and the damping ratio of each mode family against speed."""
+    from cosim.stability.coupled import family
+    rows = outcome.tables.get("modes", [])
+    out = []
+    for valves in sorted({r["valves"] for r in rows}):
+        for model in AIRSPRINGS:
+            sel = [r for r in rows if r["valves"] == valves and r["airspring"] == model and r["frequency_Hz"] > 0]
+            if not sel:
+                continue
+            panels = []
+            families = sorted({family(r["mode"]) for r in sel})   # one colour per family in every panel
+            for k in sorted({r["k_W_per_K"] for r in sel}):
+                least: Dict[Tuple[str, float], dict] = {}   # (family, speed) -> its least damped mode
+                for r in sel:
+                    key = (family(r["mode"]), r["speed_m_per_s"])
+                    if r["k_W_per_K"] == k and (key not in least or r["damping_ratio"] < least[key]["damping_ratio"]):
+                        least[key] = r
+                paths = {f: [least[key] for key in sorted(least) if key[0] == f] for f in families}
+                panels.append(Panel([Curve([r["real_per_s"] for r in p], [r["frequency_Hz"] for r in p], f, "o-")
+                                     for f, p in paths.items()], "real part σ [1/s] (> 0: growing)", "frequency [Hz]",
+                                    f"root locus, speeds {min(r['speed_m_per_s'] for r in sel):g}-"
+                                    f"{max(r['speed_m_per_s'] for r in sel):g} m/s, {k_legend(k)}"))
+                panels.append(Panel([Curve([r["speed_m_per_s"] for r in p], [r["damping_ratio"] for r in p], f, "o-")
+                                     for f, p in paths.items()], "speed V [m/s]", "damping ratio ζ [-]",
+                                    f"least damped mode of each family, {k_legend(k)}", hlines=[(0.0, "ζ = 0")]))
+            suffix = f"_valves={'on' if valves else 'off'}_{model}"
+            out.append(Figure(f"stability{suffix}.png", panels,
+                              f"Linear running stability ({'valves on' if valves else 'valves off'}, airsprings: "
+                              f"{'air circuit' if model == 'circuit' else 'static stiffness'})", 2))
+    return out
+
+
+KIND = Kind("stability", "stability", StabilityTest, __name__, car=True,
+            check_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
+            headline_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
+            plot_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
+            case_columns=("airspring", "valves", "k_W_per_K"))
