@@ -19,10 +19,11 @@ What the linearisation keeps and loses, about a state at rest:
 * G_z is the stiffness at frozen air (mass and temperature held): the adiabatic or isothermal
   stiffness arises from the temperature's rate (eq. 2, p dV/dt), through B_zd.
 
-:attr:`CircuitLinearisation.energy` is the quadratic form of the air's small-signal energy, the
-acoustic potential energy V dp^2 / (2 n p) of each chamber (n = gamma, or 1 when isothermal) and
-the kinetic energy L dq^2 / (2 rho A) of each pipe's air column: with the car's kinetic energy it
-weighs how much of a mode is in the air.
+:attr:`CircuitLinearisation.kinetic_energy` is the quadratic form of the air's kinetic energy,
+L dq^2 / (2 rho A) of each pipe's air column: beside the car's bodies' kinetic energies it says how
+much of a mode's motion is the air's. (Kinetic energies only: the air's acoustic potential energy
+is also the potential energy of every mode the airsprings carry, the carbody's bounce as much as
+the bellow-tank resonance, and says nothing about what moves.)
 """
 from __future__ import annotations
 
@@ -65,8 +66,8 @@ class CircuitLinearisation:
         Bellow force per unit state [N/kg, N/K, ...].
     G_z : (bellows, bellows) array
         Bellow stiffness at frozen air [N/m] (diagonal).
-    energy : (n, n) array
-        The small-signal energy's quadratic form, E = dx^T energy dx / 2 [J].
+    kinetic_energy : (n, n) array
+        The quadratic form of the air columns' kinetic energy, E = dx^T kinetic_energy dx / 2 [J].
     """
 
     names: List[str]
@@ -76,7 +77,7 @@ class CircuitLinearisation:
     B_zd: np.ndarray
     G_x: np.ndarray
     G_z: np.ndarray
-    energy: np.ndarray
+    kinetic_energy: np.ndarray
 
 
 def _central(f, x0: np.ndarray, steps: np.ndarray) -> np.ndarray:
@@ -127,28 +128,21 @@ def linearise_circuit(circuit: Circuit, x0, z0_m=None) -> CircuitLinearisation:
     # states that cannot change (isothermal temperatures): constants, not states
     moving = np.any(A != 0.0, axis=1) | np.any(B_z != 0.0, axis=1) | np.any(B_zd != 0.0, axis=1)
     keep = np.flatnonzero(moving)
-    energy = _energy(circuit, x0, z0)[np.ix_(keep, keep)]
+    energy = _kinetic_energy(circuit, x0, z0)[np.ix_(keep, keep)]
     return CircuitLinearisation([names[i] for i in keep], index[keep], A[np.ix_(keep, keep)], B_z[keep], B_zd[keep],
                                 G_x[:, keep], G_z, energy)
 
 
-def _energy(circuit: Circuit, x0: np.ndarray, z0: np.ndarray) -> np.ndarray:
-    """The small-signal energy's quadratic form over the states of :func:`linearise_circuit`
-    (before states that cannot change are dropped)."""
+def _kinetic_energy(circuit: Circuit, x0: np.ndarray, z0: np.ndarray) -> np.ndarray:
+    """The air columns' kinetic energy's quadratic form over the states of :func:`linearise_circuit`
+    (before states that cannot change are dropped): L / (rho A) on each pipe flow, rho the mean
+    density of the chambers at its ends."""
     lay = circuit.layout
-    nc, n_pipes = lay.n_chambers, lay.n_pipes
+    nc = lay.n_chambers
     p, T = (v[:, 0] for v in circuit.chamber_states(x0, z0))
-    m = x0[lay.m]
     R = circuit.gas.R_J_per_kgK
-    V = m * R * T / p
-    iso = np.broadcast_to(np.isinf(circuit.k_W_per_K), (nc,))
-    n_poly = np.where(iso, 1.0, circuit.gas.gamma)
-    size = 2 * nc + n_pipes + lay.n_valve_states
+    size = 2 * nc + lay.n_pipes + lay.n_valve_states
     W = np.zeros((size, size))
-    for i in range(nc):                                   # dp = p (dm/m + dT/T) at the state's volume
-        g = np.zeros(size)
-        g[i], g[nc + i] = p[i] / m[i], p[i] / T[i]
-        W += np.outer(g, g) * V[i] / (n_poly[i] * p[i])
     rho = dict(zip(circuit.chamber_names, p / (R * T)))
     for j, name in enumerate(circuit.pipe_names):
         pipe: Pipe = circuit.components[name]

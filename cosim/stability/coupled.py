@@ -14,10 +14,10 @@ crushing (the frozen-air stiffness G_z is in the car's K)::
 
 State (eta without the spin angles, which nothing depends on; eta'; w; x): d/dt X = A_c X.
 
-Modes (:class:`Mode`): each eigenvalue's frequency and damping ratio, and where its energy is:
-each body's kinetic energy by axis (1/2 M_jj |eta_j'|^2) and the air's small-signal energy
-(:attr:`~pneumatics.linear.CircuitLinearisation.energy`), as shares of their sum. The label
-(:func:`label`) is read from those shares.
+Modes (:class:`Mode`): each eigenvalue's frequency and damping ratio, and what moves: each body's
+kinetic energy by axis (1/2 M_jj |eta_j'|^2) and the air columns' in the pipes
+(:attr:`~pneumatics.linear.CircuitLinearisation.kinetic_energy`), as shares of their sum. The
+label (:func:`label`) is read from those shares.
 """
 from __future__ import annotations
 
@@ -111,7 +111,7 @@ class Mode:
     label : str
         What moves (:func:`label`).
     shares : dict
-        Energy shares by (body, axis group): keys like ``carbody y``, ``bogie 1 yaw``,
+        Kinetic energy shares by body and axis: keys like ``carbody y``, ``bogie 1 yaw``,
         ``wheelset 3 y``, ``air``; they sum to 1.
     """
 
@@ -131,7 +131,8 @@ class Mode:
 
 
 def _shares(model: CoupledModel, vector: np.ndarray) -> Dict[str, float]:
-    """Energy of each (body, axis) and of the air in an eigenvector, as shares of their sum."""
+    """Kinetic energy of each (body, axis) and of the air in the pipes in an eigenvector, as shares
+    of their sum (none moves: all to the air, a relaxation of its pressures or temperatures)."""
     car = model.car
     rates = vector[model.rates]
     kinetic = 0.5 * np.real(np.diag(car.system.M)) * np.abs(rates) ** 2
@@ -141,9 +142,9 @@ def _shares(model: CoupledModel, vector: np.ndarray) -> Dict[str, float]:
         energy[key] = energy.get(key, 0.0) + float(e)
     if model.air is not None:
         x = vector[model.pneumatic]
-        energy["air"] = float(0.5 * np.real(np.conj(x) @ model.air.energy @ x))
+        energy["air"] = float(0.5 * np.real(np.conj(x) @ model.air.kinetic_energy @ x))
     total = sum(energy.values())
-    return {k: v / total for k, v in energy.items()} if total > 0 else energy
+    return {k: v / total for k, v in energy.items()} if total > 0 else {"air": 1.0}
 
 
 def _group(shares: Dict[str, float], bodies: Tuple[str, ...], axes: Tuple[str, ...]) -> float:

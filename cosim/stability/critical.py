@@ -14,10 +14,9 @@ from typing import Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from cosim.stability.coupled import Mode, couple, modes
 from pneumatics.linear import CircuitLinearisation
 from vehicle.car.linear import CarLinearisation
-
-from cosim.stability.coupled import Mode, couple, modes
 
 __all__ = ["SpeedScan", "scan_speeds", "critical_speed", "least_damped", "grows", "DAMPING_TOLERANCE"]
 

@@ -213,3 +213,19 @@ def test_curve_window_must_lie_within_the_run(tmp_path):
     with pytest.raises(ScenarioError) as info:
         load(tmp_path, curve)
     assert info.value.path == "curve.window_s" and "within the run" in info.value.reason
+
+
+def test_a_lower_limit_is_about_the_smallest_value(tmp_path):
+    """``metric >= limit`` is decided by the worst case, the smallest value (a critical speed that
+    one k fails must fail the check, whatever the other k give)."""
+    s = load(tmp_path, {**en_data(), "checks": ["dqq_max >= 0.05", "dqq_max[k=0] > 0.1", "dqq_max <= 0.6"]})
+    cases = [CaseMetrics(k, valves, wheels={"dqq_max": {w: 0.2 + 0.01 * i + (0.1 if k else 0.0) for i, w in enumerate(WHEELS)},
+                                            "dqq_qs_max": {w: 0.0 for w in WHEELS}, "dqq_drift": {w: 0.0 for w in WHEELS}})
+             for valves in (False, True) for k in (0.0, 100.0, math.inf)]
+    cases[3].wheels["dqq_max"]["2R"] = 0.01               # valves on, k = 0: the worst for a lower limit
+    out = _outcome(s, cases)
+    values = dict((c.text, out.check_value(c)) for c in s.checks)
+    assert values["dqq_max >= 0.05"] == (0.01, "k = 0, valves on, wheel 2R")
+    assert values["dqq_max[k=0] > 0.1"][0] == 0.01
+    assert values["dqq_max <= 0.6"][0] == pytest.approx(0.37)
+    assert [c.holds(v) for c, v in out.check_results()] == [False, False, True]

@@ -1,0 +1,218 @@
+"""Running stability (cosim/stability, kind ``stability``): the coupled linearisation against finite
+differences of the nonlinear car and circuit, the air's linear model against the Helmholtz
+resonator and the static stiffness in closed form, and the kind end to end."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import exudyn as exu
+import numpy as np
+import pytest
+import yaml
+
+from cosim.errors import ScenarioError
+from cosim.kinds.stability import static_stiffness_N_per_m
+from cosim.load import load_scenario
+from cosim.runner import run
+from cosim.scenario.presets import VEHICLE_PRESETS
+from cosim.stability import couple, modes
+from pneumatics.chamber import Bellow, Tank
+from pneumatics.circuit import Circuit
+from pneumatics.layouts import static_pressures
+from pneumatics.linear import linearise_circuit
+from pneumatics.pipe import Pipe
+from vehicle.car import MetroCar
+from vehicle.car.linear import linearise_car
+from vehicle.linear import ode2_rhs
+
+from helpers import SCENARIOS, write_scenario
+
+GAMMA = 1.4
+
+
+def _scenario(tmp_path, **stability):
+    data = yaml.safe_load((SCENARIOS / "stability.yaml").read_text())
+    data["stability"].update(stability)
+    data["k_W_per_K"] = [0, 10, float("inf")]
+    data.pop("checks", None)
+    return load_scenario(write_scenario(tmp_path, data))
+
+
+# ------------------------------------------------------------------ the air's linear model
+def _bellow_tank(k):
+    components = {"B": Bellow(), "T": Tank(), "p": Pipe(a="B", b="T")}
+    circuit = Circuit(components, k_W_per_K=k)
+    return circuit, circuit.initial_state({"B": 4.2e5, "T": 4.2e5})
+
+
+@pytest.mark.parametrize("k, n", [(0.0, GAMMA), (math.inf, 1.0)])
+def test_bellow_tank_resonates_at_helmholtz_frequency(k, n):
+    """Bellow and tank joined by the pipe, the bellow held: the linearised circuit's oscillatory
+    eigenvalue is the Helmholtz resonator's, w^2 = (A/L) c^2 (1/V_b + 1/V_t), c^2 = n p / rho (n = gamma
+    adiabatic at k = 0, 1 isothermal at k = inf), to round-off (1e-6: the central differences), and
+    undamped: the pipe's loss is quadratic in the flow, it has no linear part at rest (the central
+    difference of q |q| over +-h gives h, a damping ratio of ~4e-9 here: bounded at 1e-8, two orders
+    below the tolerance at which cosim.stability calls a mode growing)."""
+    circuit, x0 = _bellow_tank(k)
+    air = linearise_circuit(circuit, x0)
+    values = np.linalg.eigvals(air.A)
+    w = max(values.imag)
+    b, t, pipe = (circuit.components[c] for c in ("B", "T", "p"))
+    rho = 4.2e5 / (circuit.gas.R_J_per_kgK * circuit.atmosphere.T_K)
+    expected = math.sqrt(pipe.area_m2 / pipe.length_m * n * 4.2e5 / rho * (1 / b.V0_m3 + 1 / t.V_m3))
+    assert w == pytest.approx(expected, rel=1e-6)
+    pair = max(values, key=lambda v: v.imag)
+    assert abs(pair.real) / abs(pair) < 1e-8
+
+
+def test_heat_exchange_damps_the_helmholtz_mode():
+    """Between the two limits (k = 10 W/K) the resonator loses energy through the walls: damped."""
+    circuit, x0 = _bellow_tank(10.0)
+    values = np.linalg.eigvals(linearise_circuit(circuit, x0).A)
+    pair = max(values, key=lambda v: v.imag)
+    assert -pair.real / abs(pair) > 1e-4
+
+
+@pytest.mark.parametrize("k, n", [(0.0, GAMMA), (10.0, 1.0), (math.inf, 1.0)])
+def test_static_stiffness_is_the_polytropic_one_of_bellow_and_tank(k, n):
+    """The airspring's static stiffness (the dynamic stiffness at w -> 0) in closed form: n p A^2 /
+    (V_b + V_t) with the tank's volume joined, adiabatic (n = gamma) at k = 0 (nothing relaxes the
+    temperature), isothermal for any k > 0 (the walls have all the time they need)."""
+    circuit, x0 = _bellow_tank(k)
+    air = linearise_circuit(circuit, x0)
+    b, t = circuit.components["B"], circuit.components["T"]
+    expected = n * 4.2e5 * b.A0_m2 ** 2 / (b.V0_m3 + t.V_m3)     # A = A0 and dV/dz = A0 here
+    assert b.dV_dz_m2 == b.A0_m2 and b.dA_dz_m == 0.0
+    assert static_stiffness_N_per_m(air)[0] == pytest.approx(expected, rel=1e-5)
+
+
+# ------------------------------------------------------------------ the coupled linearisation
+def _nonlinear_rate(car, circuit, x_full0, lin, model, X):
+    """d/dt of the coupled state X (the layout of :class:`CoupledModel`) from the nonlinear car and
+    circuit: the car's coordinates and rates, the Maxwell dampers' elongations and the air's state
+    set from X, the bellow force law anchored at the air's force at the bellows' current crushing,
+    exudyn's right-hand side solved for the reduced accelerations, the circuit's derivatives at
+    the car's crushing and rate."""
+    mbs, solver, sys = car.mbs, car._solver, lin.system
+    n = sys.M.shape[0]
+    eta = np.zeros(n)
+    eta[model.position_coordinates] = X[model.positions]
+    q = car._lin_q0 + sys.N @ eta
+    v = car._lin_v0 + sys.N @ X[model.rates]
+    mbs.systemData.SetODE2Coordinates(q, exu.ConfigurationType.Current)
+    mbs.systemData.SetODE2Coordinates_t(v, exu.ConfigurationType.Current)
+    w = X[model.maxwell]
+    for d, wi in zip(car._maxwell, w):
+        d.y_sym.SetValue(d.y + wi)
+    out = [X[model.rates][model.position_coordinates]]
+    x = x_full0.copy()
+    car._bellow_t = None
+    z, zd = car.bellow_crushing()
+    if model.air is not None:
+        x[model.air.index] += X[model.pneumatic]
+        car._bellow_t = None
+        car.set_bellow_forces(circuit.bellow_forces_N(x, z), np.diag(model.air.G_z), np.zeros(4))
+    eta_dd = np.linalg.solve(sys.M, sys.N.T @ ode2_rhs(mbs, solver))
+    out.append(eta_dd)
+    get = mbs.GetObjectOutput
+    d_now = np.array([get(d.connector, exu.OutputVariableType.DisplacementLocal)[d.axis] for d in car._maxwell])
+    out.append(lin.maxwell_rate_per_s * (d_now - np.array([d.y for d in car._maxwell]) - w))
+    if model.air is not None:
+        out.append(circuit.derivatives(x, z, zd)[model.air.index])
+    return np.concatenate(out)
+
+
+@pytest.mark.parametrize("preset, with_air", [("paper_metro_car", True), ("metro_car_arb_dampers", False)])
+def test_coupled_linearisation_is_the_derivative_of_the_nonlinear_system(tmp_path, preset, with_air):
+    """A d for random directions d against central differences of the nonlinear coupled rate
+    (:func:`_nonlinear_rate`) at +-d, d small enough for the remainder and large enough to be a
+    derivative of the real functions, not of the linearisation's own differences (positions 1e-7 m
+    and rates 1e-5 m/s, 10 and 10 times the linearisation's steps; air 1e-6 of its state). The
+    paper's car with its four-point circuit (k = 10: every air term alive), and the car with
+    dampers (Maxwell elements, emergency springs) with the air frozen. Measured: at most ~3e-6 of
+    the largest entry of each block of A d, falling as d shrinks (positions 1e-6 m gave 6e-5: the
+    Hertz contacts' nonlinearity over d); tolerance 1e-4."""
+    s = _scenario(tmp_path, speeds_m_per_s=[30.0])
+    s = dataclasses.replace(s, vehicle=VEHICLE_PRESETS[preset]())
+    car = MetroCar(s.vehicle, step_s=2e-3, speed_m_per_s=30.0, guidance="contact")
+    F0 = car.static_bellow_forces_N()
+    circuit = s.circuit.compile(10.0)
+    x0 = circuit.initial_state(static_pressures(s.circuit.components(), F0, circuit.atmosphere.p_Pa))
+    air = linearise_circuit(circuit, x0)
+    lin = linearise_car(car, F0, np.diag(air.G_z))
+    car._lin_q0 = np.array(car.mbs.systemData.GetODE2Coordinates())
+    car._lin_v0 = np.array(car.mbs.systemData.GetODE2Coordinates_t())
+    model = couple(lin, air if with_air else None)
+    rng = np.random.default_rng(3)
+    size = model.A.shape[0]
+    scale = np.ones(size)
+    scale[model.positions], scale[model.rates], scale[model.maxwell] = 1e-7, 1e-5, 1e-7
+    if with_air:
+        scale[model.pneumatic] = 1e-6 * np.abs(x0[air.index]) + 1e-9
+    for _ in range(3):
+        d = rng.standard_normal(size) * scale
+        plus = _nonlinear_rate(car, circuit, x0, lin, model, d)
+        minus = _nonlinear_rate(car, circuit, x0, lin, model, -d)
+        numeric = (plus - minus) / 2.0
+        linear = model.A @ d
+        for block in (model.positions, model.rates, model.maxwell, model.pneumatic):
+            if linear[block].size:
+                err = np.max(np.abs(numeric[block] - linear[block]))
+                assert err <= 1e-4 * np.max(np.abs(linear[block])), (block, err, np.max(np.abs(linear[block])))
+    if not with_air:
+        assert model.maxwell.stop > model.maxwell.start      # the Maxwell elements were in it
+
+
+# ------------------------------------------------------------------ the kind
+def test_stability_run_gives_critical_speeds_modes_and_figures(tmp_path):
+    """The shipped scenario at a few speeds: every case row has a critical speed inside its scan
+    bracket found to the resolution, the mode that loses damping is a bogie hunting mode, the
+    carbody modes are in the rows, modes.csv lists them, and the check decides on the worst k."""
+    data = yaml.safe_load((SCENARIOS / "stability.yaml").read_text())
+    data["stability"].update(speeds_m_per_s=[10.0, 30.0, 50.0], resolution_m_per_s=0.5)
+    data["k_W_per_K"] = [0, float("inf")]
+    data["checks"] = ["critical_speed_m_per_s >= 33.3", "min_damping_ratio >= 0"]
+    out = run(load_scenario(write_scenario(tmp_path, data)))
+    assert len(out.rows) == 4                             # 2 k x (circuit, static)
+    for row in out.rows:
+        assert 30.0 < row["critical_speed_m_per_s"] < 50.0
+        assert "hunting" in row["critical_mode"] and 3.0 < row["critical_frequency_Hz"] < 10.0
+        assert 0.5 < row["f_bounce_Hz"] < 2.0 and 0.0 < row["zeta_bounce"] < 0.5
+    results = dict((c.text, v) for c, v in out.check_results())
+    assert results["critical_speed_m_per_s >= 33.3"] == min(r["critical_speed_m_per_s"] for r in out.rows
+                                                            if r["airspring"] == "circuit")
+    assert results["min_damping_ratio >= 0"] < 0.0 and not out.checks_hold()
+    assert {m["mode"] for m in out.tables["modes"]} >= {"carbody bounce", "carbody pitch", "carbody yaw"}
+
+
+def test_the_least_damped_modes_are_labelled_by_what_moves(tmp_path):
+    """At 10 m/s the car with dampers has its textbook modes: carbody bounce 1.1 Hz, pitch 1.3 Hz,
+    lower sway below upper... in frequency order upper sway (rolling about a point below the body)
+    lowest; every mode below 20 Hz stable; a pneumatic mode among them."""
+    s = _scenario(tmp_path, speeds_m_per_s=[10.0])
+    from cosim.kinds.stability import _air, _Cars, contact_params, make_car
+    car = make_car(s, 10.0)
+    F0 = car.static_bellow_forces_N()
+    air = _air(s, False, 10.0, F0)
+    found = modes(couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.stability, s.vehicle))(10.0), air))
+    low = [m for m in found if 0.0 < m.frequency_Hz < 20.0]
+    labels = {m.label for m in low}
+    assert {"carbody bounce", "carbody pitch", "carbody yaw", "carbody lower sway", "carbody upper sway", "air"} <= labels
+    f = {m.label: m.frequency_Hz for m in sorted(low, key=lambda m: -m.frequency_Hz)}
+    assert f["carbody upper sway"] < f["carbody lower sway"]
+    assert all(m.damping_ratio > 0.0 for m in low)
+
+
+def test_contact_pair_keys_are_checked(tmp_path):
+    data = yaml.safe_load((SCENARIOS / "stability.yaml").read_text())
+    data["stability"].update(conicity=0.2, wheel_profile="worn.prw")
+    with pytest.raises(ScenarioError, match=r"stability\.wheel_profile.*not both"):
+        load_scenario(write_scenario(tmp_path, data))
+    data["stability"].pop("conicity")
+    with pytest.raises(ScenarioError, match=r"stability\.wheel_profile.*does not exist"):
+        load_scenario(write_scenario(tmp_path, data))
+    data["stability"].pop("wheel_profile")
+    data["stability"]["conicity"] = 1.5
+    with pytest.raises(ScenarioError, match=r"stability\.conicity"):
+        load_scenario(write_scenario(tmp_path, data))
