@@ -42,6 +42,9 @@ from vehicle.params import ContactParams, VehicleParams
 BODY_MODES = ("carbody bounce", "carbody pitch", "carbody yaw", "carbody lower sway", "carbody upper sway")
 #: airspring models of a case: the air in the eigenvalue problem, or each airspring its static stiffness
 AIRSPRINGS = ("circuit", "static")
+#: the brute force's growth rate is fitted to the peaks up to this many times the disturbance: small
+#: motion, before the flange or creep saturation bends it into a limit cycle
+SMALL_AMPLITUDE_FACTOR = 4.0
 #: the frequency at which the static stiffness is read [rad/s]: far below every thermal and flow
 #: time constant of the circuits (hours), far above the neutral air-mass mode (0)
 STATIC_OMEGA_RAD_PER_S = 1e-6
@@ -56,7 +59,13 @@ class StabilityTest:
     out of ``modes.csv`` and the figures, not out of the critical speed. ``conicity`` (a cone on
     knife-edge rails) or ``wheel_profile`` (a file, relative to the scenario, on the UIC60 rail):
     the wheel-rail pair instead of S1002 / UIC60 1:40. ``contact_smoothing_mm``: the contact
-    table's smoothing (null: 0.1 mm). ``valve_settings``: as a curve's."""
+    table's smoothing (null: 0.1 mm). ``valve_settings``: as a curve's.
+
+    Brute force (the nonlinear critical speed; none without ``nonlinear_speeds_m_per_s``): at
+    each of those speeds and for each of ``disturbances_m`` (every wheelset released at that
+    lateral offset, at rest), a co-simulated run of ``nonlinear_s`` on the contact; the growth
+    rate of the leading wheelset's oscillation decides whether it grows, its amplitude over the
+    last second is the bifurcation diagram's point."""
 
     speeds_m_per_s: Tuple[float, ...] = tuple(float(v) for v in range(5, 101, 5))
     resolution_m_per_s: float = 0.1
@@ -66,6 +75,9 @@ class StabilityTest:
     wheel_profile: Optional[str] = None
     contact_smoothing_mm: Optional[float] = None
     valve_settings: Tuple[bool, ...] = (False,)
+    nonlinear_speeds_m_per_s: Tuple[float, ...] = ()
+    disturbances_m: Tuple[float, ...] = (0.0005,)
+    nonlinear_s: float = 10.0
 
     FIELD_RANGES = {
         "speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most; > 0 (creepages are relative to V)"),
@@ -74,8 +86,12 @@ class StabilityTest:
         "max_frequency_Hz": positive("Hz"),
         "conicity": Range(0.0, 0.8, False, True, "", "equivalent conicities of wheels in service: 0.01-0.6"),
         "contact_smoothing_mm": Range(0.0, 1.0, unit="mm", why="0: the rigid table; 1 mm blurs the flange itself"),
+        "nonlinear_speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most"),
+        "disturbances_m": Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)"),
+        "nonlinear_s": Range(1.0, 600.0, unit="s", why="long enough for several hunting cycles"),
     }
-    FIELD_LIST_RULES = {"speeds_m_per_s": (True, True), "valve_settings": (True, True)}
+    FIELD_LIST_RULES = {"speeds_m_per_s": (True, True), "valve_settings": (True, True),
+                        "nonlinear_speeds_m_per_s": (False, True), "disturbances_m": (True, True)}
 
     @property
     def reference_speed(self) -> float:
@@ -102,8 +118,9 @@ def _replace(test: StabilityTest, **changes) -> StabilityTest:
 
 
 def duration_s(test: StabilityTest) -> float:
-    """The analysis integrates nothing: a nominal second, so that the solver's steps pass their checks."""
-    return 1.0
+    """The brute-force runs' length; without them the analysis integrates nothing (a nominal second,
+    so that the solver's steps pass their checks)."""
+    return test.nonlinear_s if test.nonlinear_speeds_m_per_s else 1.0
 
 
 def valve_settings(test: StabilityTest, valves: bool) -> Tuple[bool, ...]:
@@ -154,6 +171,18 @@ def make_car(scenario: Scenario, speed_m_per_s: Optional[float] = None, contact:
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, speed_m_per_s=float(v),
                     guidance="contact", contact=contact or contact_params(test, scenario.vehicle),
                     track_structure=scenario.track)
+
+
+def disturbed_car(scenario: Scenario):
+    """The car of a brute-force run (picklable factory for :mod:`cosim.kinds.car`): running at the
+    scenario's first nonlinear speed, every wheelset released at its first disturbance."""
+    from vehicle.car import MetroCar
+    test = scenario.stability
+    return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
+                    speed_m_per_s=test.nonlinear_speeds_m_per_s[0], guidance="contact",
+                    contact=contact_params(test, scenario.vehicle), track_structure=scenario.track,
+                    spectral_radius=scenario.solver.spectral_radius,
+                    wheelset_lateral_offset_m=[test.disturbances_m[0]] * 4)
 
 
 def static_stiffness_N_per_m(air) -> np.ndarray:
@@ -240,25 +269,80 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
                                               "speed_m_per_s": float(v), "mode": m.label,
                                               "frequency_Hz": m.frequency_Hz, "damping_ratio": m.damping_ratio,
                                               "real_per_s": m.eigenvalue.real, "imag_per_s": m.eigenvalue.imag})
-    cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r[m] for m in KIND.check_metrics})
+    tables = {"modes": mode_rows}
+    diagnoses: List[str] = []
+    if test.nonlinear_speeds_m_per_s:
+        tables["nonlinear"], diagnoses = _brute_force(scenario, progress)
+        _add_onsets(rows, tables["nonlinear"])
+    cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, math.nan) for m in KIND.check_metrics})
              for r in rows if r["airspring"] == "circuit"]
     metrics = {"critical_speed_m_per_s": min(r["critical_speed_m_per_s"] for r in rows if r["airspring"] == "circuit"),
                "min_damping_ratio": min(r["min_damping_ratio"] for r in rows if r["airspring"] == "circuit")}
     info = {"contact_table": contact.table_csv or "S1002 / UIC60 1:40 (shipped)",
-            "conicity_at_centre": _centre_conicity(table),
+            "conicity_at_centre": _centre_conicity(probe),
             "equivalent_conicity_3mm": float(table.equivalent_conicity(0.003)),
             "speeds_m_per_s": speeds}
     shown = ("valves", "k_W_per_K", "airspring", "critical_speed_m_per_s", "critical_mode", "critical_frequency_Hz",
              "min_damping_ratio", "f_lower_sway_Hz", "zeta_lower_sway", "f_yaw_Hz", "zeta_yaw")
-    return Outcome(scenario, rows, shown, {}, metrics, cases, [], [], info, time.perf_counter() - t0,
-                   tables={"modes": mode_rows})
+    if test.nonlinear_speeds_m_per_s:
+        shown += ("nonlinear_onset_m_per_s",)
+    return Outcome(scenario, rows, shown, {}, metrics, cases, diagnoses, [], info, time.perf_counter() - t0,
+                   tables=tables)
 
 
-def _centre_conicity(table) -> float:
-    """(r_L - r_R) / (2 y) of the table at y = +-0.1 mm: the conicity a linearisation about the
-    centred wheelset sees (before the contact law's smoothing)."""
-    y = 1e-4
-    return float(np.mean([table.delta_r(s * y) / (2.0 * s * y) for s in (1.0, -1.0)]))
+def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str, object]], List[str]]:
+    """Every brute-force run (speed x disturbance x k x valve setting, co-simulated): per run the
+    leading wheelset's growth rate and final amplitude (:mod:`cosim.stability.nonlinear`), and the
+    diagnoses of runs that stopped (a derailed car: it grew). The static-stiffness rows get no
+    onset: the co-simulation always runs the air circuit."""
+    from cosim.kinds.car import simulate_cases
+    from cosim.stability.nonlinear import final_amplitude_m, growth_rate_per_s
+    test = scenario.stability
+    out, diagnoses = [], []
+    for d in test.disturbances_m:
+        for v in test.nonlinear_speeds_m_per_s:
+            progress(f"brute force at {v:g} m/s, wheelsets released at {1e3 * d:g} mm, {test.nonlinear_s:g} s")
+            variant = scenario.with_experiment(nonlinear_speeds_m_per_s=(v,), disturbances_m=(d,))
+            ds, found = simulate_cases(variant, test.valve_settings, disturbed_car, test.nonlinear_s, progress)
+            diagnoses += [f"{v:g} m/s, {1e3 * d:g} mm: {f}" for f in found]
+            t = ds["time"].values
+            for j in range(ds.sizes["case"]):
+                case = ds.isel(case=j)
+                y = case["wheelset_lateral_m"].isel(wheelset=0).values
+                ran = np.isfinite(y)
+                stopped = not ran.all()
+                rate = growth_rate_per_s(t[ran], y[ran], max_amplitude_m=SMALL_AMPLITUDE_FACTOR * d)
+                if math.isnan(rate) and stopped:
+                    rate = math.inf                   # derailed before it could be measured: it grew
+                out.append({"valves": bool(case["valves"].item()), "k_W_per_K": float(case["k_W_per_K"].item()),
+                            "speed_m_per_s": float(v), "disturbance_m": float(d), "growth_rate_per_s": rate,
+                            "final_amplitude_m": final_amplitude_m(t[ran], y[ran]), "stopped": stopped})
+    return out, diagnoses
+
+
+def _add_onsets(rows: List[Dict[str, object]], runs: List[Dict[str, object]]) -> None:
+    """The brute-force onset (smallest disturbance) in each circuit row: where the growth rate
+    crosses zero between the speeds (None: NaN, with the reason in ``nonlinear_note``)."""
+    from cosim.stability.nonlinear import onset_speed
+    smallest = min(r["disturbance_m"] for r in runs)
+    for row in rows:
+        if row["airspring"] != "circuit":
+            row["nonlinear_onset_m_per_s"], row["nonlinear_note"] = math.nan, "the brute force runs the air circuit"
+            continue
+        mine = [r for r in runs if r["disturbance_m"] == smallest and r["k_W_per_K"] == row["k_W_per_K"]
+                and r["valves"] == row["valves"]]
+        v = onset_speed([r["speed_m_per_s"] for r in mine], [r["growth_rate_per_s"] for r in mine])
+        row["nonlinear_onset_m_per_s"] = math.nan if v is None else v
+        row["nonlinear_note"] = ("" if v is not None else
+                                 "no change from decay to growth among the brute-force speeds")
+
+
+def _centre_conicity(car) -> float:
+    """d(r_L - r_R)/dy / 2 of the contact law's (smoothed) table at y = 0, over +-0.01 mm: the
+    conicity the linearisation about the centred wheelset sees."""
+    y = 1e-5
+    plus, minus = car._wr.table.geometry(y), car._wr.table.geometry(-y)
+    return float((plus["r_L"] - plus["r_R"] - minus["r_L"] + minus["r_R"]) / (4.0 * y))
 
 
 def _critical_columns(cars, air, scan, v_crit, bracket, note) -> Dict[str, object]:
@@ -309,6 +393,36 @@ def figures(outcome: Outcome) -> List[Figure]:
             out.append(Figure(f"stability{suffix}.png", panels,
                               f"Linear running stability ({'valves on' if valves else 'valves off'}, airsprings: "
                               f"{'air circuit' if model == 'circuit' else 'static stiffness'})", 2))
+    return out + _bifurcation_figures(outcome)
+
+
+def _bifurcation_figures(outcome: Outcome) -> List[Figure]:
+    """Per valve setting: the brute force's final amplitude of the leading wheelset against speed
+    (the bifurcation diagram) and its growth rate, a curve per k and disturbance, with each k's
+    linear critical speed (a vertical line)."""
+    runs = outcome.tables.get("nonlinear", [])
+    out = []
+    for valves in sorted({r["valves"] for r in runs}):
+        mine = [r for r in runs if r["valves"] == valves]
+        amplitude, growth = [], []
+        for k in sorted({r["k_W_per_K"] for r in mine}):
+            for d in sorted({r["disturbance_m"] for r in mine}):
+                pts = sorted((r["speed_m_per_s"], r) for r in mine if r["k_W_per_K"] == k and r["disturbance_m"] == d)
+                label = f"{k_legend(k)}, released at {1e3 * d:g} mm"
+                amplitude.append(Curve([v for v, _ in pts], [1e3 * r["final_amplitude_m"] for _, r in pts], label, "o-"))
+                growth.append(Curve([v for v, _ in pts], [r["growth_rate_per_s"] for _, r in pts], label, "o-"))
+        top = max((1e3 * r["final_amplitude_m"] for r in mine), default=1.0)
+        for row in outcome.rows:
+            if row["valves"] == valves and row["airspring"] == "circuit" and math.isfinite(row["critical_speed_m_per_s"]):
+                v = row["critical_speed_m_per_s"]
+                amplitude.append(Curve([v, v], [0.0, top], f"linear critical speed, {k_legend(row['k_W_per_K'])}", ":"))
+        out.append(Figure(f"bifurcation_valves={'on' if valves else 'off'}.png",
+                          [Panel(amplitude, "speed V [m/s]", "leading wheelset amplitude, last second [mm]",
+                                 "brute force: amplitude after the run"),
+                           Panel(growth, "speed V [m/s]", "growth rate σ [1/s] (> 0: grows)",
+                                 "brute force: growth of the leading wheelset's oscillation",
+                                 hlines=[(0.0, "σ = 0")])],
+                          f"Nonlinear running stability ({'valves on' if valves else 'valves off'})", 2))
     return out
 
 

@@ -216,3 +216,33 @@ def test_contact_pair_keys_are_checked(tmp_path):
     data["stability"]["conicity"] = 1.5
     with pytest.raises(ScenarioError, match=r"stability\.conicity"):
         load_scenario(write_scenario(tmp_path, data))
+
+
+def test_brute_force_onset_on_a_cone_agrees_with_the_linear_critical_speed(tmp_path):
+    """The car with dampers on a 0.2 cone (linear critical speed 54.6 m/s): released at 0.5 mm, the
+    co-simulated car's hunting dies at 5 % below the linear critical speed and grows at 5 % above,
+    so the brute-force onset lies within 5 % of it (the issue's tolerance; measured 0.4 %); below
+    it, the measured decay rate is the linear model's (Re lambda of the least damped hunting mode,
+    -0.708 /s against -0.703 /s measured at 51.8 m/s: 1 %; asked within 5 %: the run's 5 ms steps and the small
+    amplitude's nonlinearity)."""
+    data = {"kind": "stability", "name": "cone", "k_W_per_K": [10], "vehicle": "metro_car_arb_dampers",
+            "circuit": {"layout": "four_point", "preset": "paper_table1", "valves": False},
+            "stability": {"speeds_m_per_s": [40.0, 50.0, 60.0], "conicity": 0.2, "nonlinear_s": 6.0,
+                          "disturbances_m": [0.0005]},
+            "solver": {"jobs": 1}}
+    first = run(load_scenario(write_scenario(tmp_path, data)))
+    v_lin = first.rows[0]["critical_speed_m_per_s"]
+    assert 50.0 < v_lin < 60.0
+    data["stability"]["nonlinear_speeds_m_per_s"] = [0.95 * v_lin, 1.05 * v_lin]
+    out = run(load_scenario(write_scenario(tmp_path, data, "nonlinear.yaml")))
+    below, above = sorted(out.tables["nonlinear"], key=lambda r: r["speed_m_per_s"])
+    assert below["growth_rate_per_s"] < 0.0 < above["growth_rate_per_s"]
+    row = next(r for r in out.rows if r["airspring"] == "circuit")
+    assert abs(row["nonlinear_onset_m_per_s"] / v_lin - 1.0) < 0.05
+    s = load_scenario(write_scenario(tmp_path, data, "nonlinear.yaml"))
+    from cosim.kinds.stability import _air, _Cars, contact_params, make_car
+    F0 = make_car(s, 10.0).static_bellow_forces_N()
+    air = _air(s, False, 10.0, F0)
+    linear = modes(couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.stability, s.vehicle))(below["speed_m_per_s"]), air))
+    sigma = max(m.eigenvalue.real for m in linear if m.frequency_Hz > 0 and "hunting" in m.label)
+    assert below["growth_rate_per_s"] == pytest.approx(sigma, rel=0.05)
