@@ -115,3 +115,57 @@ def test_central_differences_agree_with_exudyns_own_linearisation():
     assert spins                                       # the spin angles give zero eigenvalues in both
     for x, y in zip(a, b):
         assert abs(x - y) < 1e-5 * abs(x), (x, y)
+
+
+def _classical_parameters(table, params, k_y, k_psi, lam):
+    """The classical model's parameters (tests/vehicle/classical_wheelset.py) for the law's wheelset:
+    the same creep coefficients, the law's at the static normal load W / (2 cos delta0)."""
+    from vehicle.wheelrail.contact_law import ContactLawTable
+    law = ContactLawTable(table, params)
+    g = law.geometry(0.0)
+    W = params.axle_load_N + params.mass_kg * params.gravity_m_per_s2
+    load = W / (2.0 * math.cos(math.atan(lam))) / law.reference_load_N
+    return dict(m=params.mass_kg, I_z=params.yaw_inertia_kg_m2, I_s=params.spin_inertia_kg_m2, r0=table.r0,
+                b=table.contact_half_spacing, lam=lam, W=W, f11=g["k11_L"] * load ** (2 / 3),
+                f22=g["k22_L"] * load ** (2 / 3), f23=g["k23_L"] * load, f33=g["k33_L"] * load ** (4 / 3),
+                k_y=k_y, k_psi=k_psi)
+
+
+def test_restrained_wheelset_against_the_classical_linear_solution():
+    """A wheelset on a 0.05 cone, tied to its moving frame by k_y = 0.5 MN/m and k_psi = 1 MN m/rad,
+    against the classical linear model written independently (tests/vehicle/classical_wheelset.py,
+    every effect on: creep f11, f22, f23, f33, gravitational stiffness with load transfer, roll
+    kinematics, gyroscopic terms), with the law's creep coefficients at the static load. Friction
+    100: no saturation (the classical model has none; at mu = 0.36 the steady spin creep alone
+    would use ~half of mu N on a 0.2 cone). Measured: the hunting eigenvalue within 0.1 % of |lambda|
+    at 20 and 50 m/s, the critical speed 96.18 m/s against 96.87 (0.7 %); asked: 1 %.
+
+    On a 0.2 cone the critical speeds are 50.30 and 52.08 m/s (3.4 %): holding the law's creep
+    coefficients at the static load (a temporary patch, run by hand) moves it to 51.31 m/s -- the
+    coefficients' dependence on the normal load (f23 ~ N, f11 and f22 ~ N^(2/3)), which the
+    classical model holds constant, is 2/3 of the difference; the rest is not isolated (the
+    classical model without the gyroscopic roll moment's load transfer and the spin axis's tilt
+    gives 51.34 m/s)."""
+    import classical_wheelset as classical
+
+    from vehicle.wheelrail.contact_law import WheelsetParams
+    lam, k_y, k_psi = 0.05, 0.5e6, 1.0e6
+    params = WheelsetParams(friction_coefficient=100.0)
+    table = ContactTable.cone(lam, r0_m=0.42)
+    p = _classical_parameters(table, params, k_y, k_psi, lam)
+
+    def hunting(V):
+        _, lin = restrained_wheelset(table, V, k_y, k_psi, params)
+        return min((v for v in first_order_eigenvalues(lin.M, lin.K, lin.D) if v.imag > 1e-6), key=abs)
+
+    for V in (20.0, 50.0):
+        ours = hunting(V)
+        theirs = min((v for v in classical.eigenvalues(V, p, flags=classical.FLAGS_ALL) if v.imag > 1e-6), key=abs)
+        assert abs(ours - theirs) < 0.01 * abs(theirs), (V, ours, theirs)
+    lo, hi = 80.0, 110.0
+    assert hunting(lo).real < 0.0 < hunting(hi).real
+    while hi - lo > 0.05:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if hunting(mid).real > 0.0 else (mid, hi)
+    expected = classical.critical_speed(p, flags=classical.FLAGS_ALL)
+    assert 0.5 * (lo + hi) == pytest.approx(expected, rel=0.01)
