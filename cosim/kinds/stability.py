@@ -65,7 +65,14 @@ class StabilityTest:
     each of those speeds and for each of ``disturbances_m`` (every wheelset released at that
     lateral offset, at rest), a co-simulated run of ``nonlinear_s`` on the contact; the growth
     rate of the leading wheelset's oscillation decides whether it grows, its amplitude over the
-    last second is the bifurcation diagram's point."""
+    last second is the bifurcation diagram's point.
+
+    Ramp-down (none without ``ramp_from_m_per_s``): the car released at ``ramp_disturbance_m``
+    runs ``ramp_hold_s`` at ``ramp_from_m_per_s`` (above the critical speed: it settles on its
+    hunting limit cycle), then slows down at each of ``ramp_decelerations_m_per_s2`` (halve it to
+    show the result does not depend on it) to ``ramp_to_m_per_s``; the speed at which the limit
+    cycle dies is where the leading wheelset's amplitude falls below 5 % of the limit cycle's at the
+    start speed (it collapses there, or has faded into the decay of a stable car)."""
 
     speeds_m_per_s: Tuple[float, ...] = tuple(float(v) for v in range(5, 101, 5))
     resolution_m_per_s: float = 0.1
@@ -78,6 +85,11 @@ class StabilityTest:
     nonlinear_speeds_m_per_s: Tuple[float, ...] = ()
     disturbances_m: Tuple[float, ...] = (0.0005,)
     nonlinear_s: float = 10.0
+    ramp_from_m_per_s: Optional[float] = None
+    ramp_to_m_per_s: float = 20.0
+    ramp_decelerations_m_per_s2: Tuple[float, ...] = (0.2, 0.1)
+    ramp_hold_s: float = 5.0
+    ramp_disturbance_m: float = 0.003
 
     FIELD_RANGES = {
         "speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most; > 0 (creepages are relative to V)"),
@@ -89,9 +101,19 @@ class StabilityTest:
         "nonlinear_speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most"),
         "disturbances_m": Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)"),
         "nonlinear_s": Range(1.0, 600.0, unit="s", why="long enough for several hunting cycles"),
+        "ramp_from_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most"),
+        "ramp_to_m_per_s": Range(0.0, 100.0, False, True, "m/s", "> 0: the creepages are relative to the speed"),
+        "ramp_decelerations_m_per_s2": Range(1e-3, 2.0, unit="m/s^2", why="slow: the limit cycle must follow the speed"),
+        "ramp_hold_s": Range(0.0, 600.0, unit="s", why="the time to settle on the limit cycle"),
+        "ramp_disturbance_m": Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)"),
     }
     FIELD_LIST_RULES = {"speeds_m_per_s": (True, True), "valve_settings": (True, True),
-                        "nonlinear_speeds_m_per_s": (False, True), "disturbances_m": (True, True)}
+                        "nonlinear_speeds_m_per_s": (False, True), "disturbances_m": (True, True),
+                        "ramp_decelerations_m_per_s2": (True, True)}
+
+    def ramp_duration_s(self, deceleration_m_per_s2: float) -> float:
+        """How long a ramp-down at that deceleration runs [s]."""
+        return self.ramp_hold_s + (self.ramp_from_m_per_s - self.ramp_to_m_per_s) / deceleration_m_per_s2
 
     @property
     def reference_speed(self) -> float:
@@ -104,6 +126,10 @@ def parse(data, vehicle: VehicleParams, path: Path) -> StabilityTest:
     if test.conicity is not None and test.wheel_profile is not None:
         raise ScenarioError(path, ["stability", "wheel_profile"], "give either conicity (a cone) or wheel_profile "
                                                                    "(a profile file), not both")
+    if test.ramp_from_m_per_s is not None and not test.ramp_to_m_per_s < test.ramp_from_m_per_s:
+        raise ScenarioError(path, ["stability", "ramp_to_m_per_s"], f"the ramp slows down: expected below "
+                                                                     f"ramp_from_m_per_s ({test.ramp_from_m_per_s:g} "
+                                                                     f"m/s), got {test.ramp_to_m_per_s:g}")
     if test.wheel_profile is not None:
         file = Path(path).parent / test.wheel_profile
         if not file.is_file():
@@ -118,9 +144,20 @@ def _replace(test: StabilityTest, **changes) -> StabilityTest:
 
 
 def duration_s(test: StabilityTest) -> float:
-    """The brute-force runs' length; without them the analysis integrates nothing (a nominal second,
-    so that the solver's steps pass their checks)."""
-    return test.nonlinear_s if test.nonlinear_speeds_m_per_s else 1.0
+    """The longest time-domain run (brute force, ramp-down); without them the analysis integrates
+    nothing (a nominal second, so that the solver's steps pass their checks)."""
+    runs = [test.nonlinear_s] if test.nonlinear_speeds_m_per_s else []
+    if test.ramp_from_m_per_s is not None:
+        runs.append(test.ramp_duration_s(min(test.ramp_decelerations_m_per_s2)))
+    return max(runs, default=1.0)
+
+
+def shortest_duration_s(test: StabilityTest) -> float:
+    """The shortest time-domain run (faults must happen within every run)."""
+    runs = [test.nonlinear_s] if test.nonlinear_speeds_m_per_s else []
+    if test.ramp_from_m_per_s is not None:
+        runs.append(test.ramp_duration_s(max(test.ramp_decelerations_m_per_s2)))
+    return min(runs, default=1.0)
 
 
 def valve_settings(test: StabilityTest, valves: bool) -> Tuple[bool, ...]:
@@ -185,14 +222,28 @@ def disturbed_car(scenario: Scenario):
                     wheelset_lateral_offset_m=[test.disturbances_m[0]] * 4)
 
 
+def ramping_car(scenario: Scenario):
+    """The car of a ramp-down (picklable factory for :mod:`cosim.kinds.car`): released at the ramp's
+    disturbance, held at its start speed, then slowing at the first of its decelerations."""
+    from vehicle.car import MetroCar
+    test = scenario.stability
+    return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
+                    speed_m_per_s=test.ramp_from_m_per_s, guidance="contact",
+                    contact=contact_params(test, scenario.vehicle), track_structure=scenario.track,
+                    spectral_radius=scenario.solver.spectral_radius,
+                    wheelset_lateral_offset_m=[test.ramp_disturbance_m] * 4,
+                    deceleration=(test.ramp_hold_s, test.ramp_decelerations_m_per_s2[0]))
+
+
 def static_stiffness_N_per_m(air) -> np.ndarray:
-    """Each airspring's static stiffness [N/m] from the circuit's linearisation: the real part of
-    its dynamic stiffness G_z + G_x (i w - A)^-1 (B_z + i w B_zd) at w = :data:`STATIC_OMEGA_RAD_PER_S`
-    (isothermal for k > 0, adiabatic for k = 0, with whatever volume stays connected)."""
+    """The airsprings' static stiffness matrix [N/m] from the circuit's linearisation (bellow i's
+    force per metre of bellow j's crushing): the real part of the dynamic stiffness
+    G_z + G_x (i w - A)^-1 (B_z + i w B_zd) at w = :data:`STATIC_OMEGA_RAD_PER_S` (isothermal for
+    k > 0, adiabatic for k = 0, with whatever volume stays connected; off the diagonal where
+    bellows share their air)."""
     w = STATIC_OMEGA_RAD_PER_S
     n = air.A.shape[0]
-    K = air.G_z + air.G_x @ np.linalg.solve(1j * w * np.eye(n) - air.A, air.B_z + 1j * w * air.B_zd)
-    return np.real(np.diag(K))
+    return np.real(air.G_z + air.G_x @ np.linalg.solve(1j * w * np.eye(n) - air.A, air.B_z + 1j * w * air.B_zd))
 
 
 class _Cars:
@@ -251,9 +302,10 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
             air = _air(scenario, valves, k, F0)
             if circuit_cars is None:                   # the frozen-air stiffness: the same for every k
                 circuit_cars = _Cars(scenario, F0, np.diag(air.G_z), contact)
+            K_static = static_stiffness_N_per_m(air)
             for model in AIRSPRINGS:
-                cars = circuit_cars if model == "circuit" else _Cars(scenario, F0, static_stiffness_N_per_m(air), contact)
-                coupled_air = air if model == "circuit" else None
+                cars = circuit_cars if model == "circuit" else _Cars(scenario, F0, np.diag(K_static), contact)
+                coupled_air = air if model == "circuit" else (None, K_static - np.diag(np.diag(K_static)))
                 scan = scan_speeds(cars, coupled_air, speeds)
                 v_crit, bracket, note = critical_speed(cars, coupled_air, scan, test.resolution_m_per_s)
                 progress(f"valves {'on' if valves else 'off'}, k = {k:g} W/K, airsprings {model}: {note}")
@@ -284,6 +336,11 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
             "speeds_m_per_s": speeds}
     shown = ("valves", "k_W_per_K", "airspring", "critical_speed_m_per_s", "critical_mode", "critical_frequency_Hz",
              "min_damping_ratio", "f_lower_sway_Hz", "zeta_lower_sway", "f_yaw_Hz", "zeta_yaw")
+    if test.ramp_from_m_per_s is not None:
+        tables["ramp"], tables["ramp_envelope"], found = _ramp_down(scenario, progress)
+        diagnoses += found
+        _add_ramp_ends(rows, tables["ramp"])
+        shown += ("limit_cycle_ends_m_per_s",)
     if test.nonlinear_speeds_m_per_s:
         shown += ("nonlinear_onset_m_per_s",)
     return Outcome(scenario, rows, shown, {}, metrics, cases, diagnoses, [], info, time.perf_counter() - t0,
@@ -320,6 +377,55 @@ def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str,
     return out, diagnoses
 
 
+def _ramp_down(scenario: Scenario, progress: Progress):
+    """Every ramp-down (deceleration x k x valve setting, co-simulated): rows of the limit cycle's
+    amplitude at the start speed and the speed at which it died
+    (:func:`cosim.stability.nonlinear.limit_cycle_end`); rows of the envelope against speed (the
+    figure's trace); the diagnoses."""
+    from cosim.kinds.car import simulate_cases
+    from cosim.stability.nonlinear import envelope, limit_cycle_end
+    from vehicle.speed import SpeedProfile
+    test = scenario.stability
+    out, traces, diagnoses = [], [], []
+    for a in test.ramp_decelerations_m_per_s2:
+        duration = test.ramp_duration_s(a)
+        progress(f"ramp-down {test.ramp_from_m_per_s:g} -> {test.ramp_to_m_per_s:g} m/s at {a:g} m/s^2 "
+                 f"({duration:g} s)")
+        variant = scenario.with_experiment(ramp_decelerations_m_per_s2=(a,))
+        ds, found = simulate_cases(variant, test.valve_settings, ramping_car, duration, progress)
+        diagnoses += [f"ramp at {a:g} m/s^2: {f}" for f in found]
+        profile = SpeedProfile(test.ramp_from_m_per_s, test.ramp_hold_s, a)
+        t = ds["time"].values
+        for j in range(ds.sizes["case"]):
+            case = ds.isel(case=j)
+            y = case["wheelset_lateral_m"].isel(wheelset=0).values
+            ran = np.isfinite(y)
+            t_end, amplitude = limit_cycle_end(t[ran], y[ran], test.ramp_hold_s)
+            tc, env = envelope(t[ran], y[ran])
+            key = {"valves": bool(case["valves"].item()), "k_W_per_K": float(case["k_W_per_K"].item()),
+                   "deceleration_m_per_s2": float(a)}
+            out.append({**key, "limit_cycle_amplitude_m": amplitude,
+                        "limit_cycle_ends_m_per_s": float(profile.speed(t_end)) if math.isfinite(t_end) else math.nan,
+                        "stopped": not ran.all()})
+            traces += [{**key, "time_s": float(tc_i), "speed_m_per_s": float(profile.speed(tc_i)), "envelope_m": float(e)}
+                       for tc_i, e in list(zip(tc, env))[::10]]          # every 0.5 s
+    return out, traces, diagnoses
+
+
+def _add_ramp_ends(rows: List[Dict[str, object]], ramps: List[Dict[str, object]]) -> None:
+    """The ramp-down's result in each circuit row: the speed where the limit cycle died at the
+    smallest deceleration, and how far the other decelerations' results lie from it."""
+    for row in rows:
+        if row["airspring"] != "circuit":
+            row["limit_cycle_ends_m_per_s"] = row["limit_cycle_ends_spread_m_per_s"] = math.nan
+            continue
+        mine = sorted((r["deceleration_m_per_s2"], r["limit_cycle_ends_m_per_s"]) for r in ramps
+                      if r["k_W_per_K"] == row["k_W_per_K"] and r["valves"] == row["valves"])
+        row["limit_cycle_ends_m_per_s"] = mine[0][1]
+        row["limit_cycle_ends_spread_m_per_s"] = (max(v for _, v in mine) - min(v for _, v in mine)
+                                                  if len(mine) > 1 else math.nan)
+
+
 def _add_onsets(rows: List[Dict[str, object]], runs: List[Dict[str, object]]) -> None:
     """The brute-force onset (smallest disturbance) in each circuit row: where the growth rate
     crosses zero between the speeds (None: NaN, with the reason in ``nonlinear_note``)."""
@@ -346,18 +452,18 @@ def _centre_conicity(car) -> float:
 
 
 def _critical_columns(cars, air, scan, v_crit, bracket, note) -> Dict[str, object]:
-    """The critical speed's columns of a summary row (see :func:`run`)."""
-    from cosim.stability import couple, modes
-    from cosim.stability.critical import least_damped
+    """The critical speed's columns of a summary row (see :func:`run`): the speed (inf: stable over
+    the whole scan; the scan's lowest speed when a mode grows already there, an upper bound), and
+    the least damped mode where it grows (at the bracket's growing end, or the lowest speed)."""
+    from cosim.stability.critical import least_damped, modes_at
     lowest = min((m.damping_ratio for ms in scan.modes for m in ms), default=math.nan)
     out = {"min_damping_ratio": lowest, "critical_note": note}
-    if v_crit is None:
-        below = math.isnan(bracket[0])
-        out.update(critical_speed_m_per_s=(bracket[1] if below else math.inf), critical_mode="",
-                   critical_frequency_Hz=math.nan)
+    if v_crit is None and not math.isnan(bracket[0]):
+        out.update(critical_speed_m_per_s=math.inf, critical_mode="", critical_frequency_Hz=math.nan)
         return out
-    m = least_damped(modes(couple(cars(bracket[1]), air)))
-    out.update(critical_speed_m_per_s=v_crit, critical_mode=m.label, critical_frequency_Hz=m.frequency_Hz)
+    m = least_damped(modes_at(cars, air, bracket[1]))
+    out.update(critical_speed_m_per_s=bracket[1] if v_crit is None else v_crit, critical_mode=m.label,
+               critical_frequency_Hz=m.frequency_Hz)
     return out
 
 
@@ -396,13 +502,25 @@ def figures(outcome: Outcome) -> List[Figure]:
     return out + _bifurcation_figures(outcome)
 
 
+def _ramp_traces(outcome: Outcome, valves: bool) -> List[Curve]:
+    """The ramp-downs' envelopes against speed [mm], a curve per k and deceleration."""
+    rows = [r for r in outcome.tables.get("ramp_envelope", []) if r["valves"] == valves]
+    out = []
+    for k in sorted({r["k_W_per_K"] for r in rows}):
+        for a in sorted({r["deceleration_m_per_s2"] for r in rows}):
+            pts = [r for r in rows if r["k_W_per_K"] == k and r["deceleration_m_per_s2"] == a]
+            out.append(Curve([r["speed_m_per_s"] for r in pts], [1e3 * r["envelope_m"] for r in pts],
+                             f"ramp-down at {a:g} m/s², {k_legend(k)}", "-"))
+    return out
+
+
 def _bifurcation_figures(outcome: Outcome) -> List[Figure]:
     """Per valve setting: the brute force's final amplitude of the leading wheelset against speed
     (the bifurcation diagram) and its growth rate, a curve per k and disturbance, with each k's
     linear critical speed (a vertical line)."""
     runs = outcome.tables.get("nonlinear", [])
     out = []
-    for valves in sorted({r["valves"] for r in runs}):
+    for valves in sorted({r["valves"] for r in runs + outcome.tables.get("ramp", [])}):
         mine = [r for r in runs if r["valves"] == valves]
         amplitude, growth = [], []
         for k in sorted({r["k_W_per_K"] for r in mine}):
@@ -411,17 +529,19 @@ def _bifurcation_figures(outcome: Outcome) -> List[Figure]:
                 label = f"{k_legend(k)}, released at {1e3 * d:g} mm"
                 amplitude.append(Curve([v for v, _ in pts], [1e3 * r["final_amplitude_m"] for _, r in pts], label, "o-"))
                 growth.append(Curve([v for v, _ in pts], [r["growth_rate_per_s"] for _, r in pts], label, "o-"))
-        top = max((1e3 * r["final_amplitude_m"] for r in mine), default=1.0)
+        for trace in _ramp_traces(outcome, valves):
+            amplitude.append(trace)
+        top = max([1e3 * r["final_amplitude_m"] for r in mine] + [max(c.y) for c in amplitude if len(c.y)], default=1.0)
         for row in outcome.rows:
             if row["valves"] == valves and row["airspring"] == "circuit" and math.isfinite(row["critical_speed_m_per_s"]):
                 v = row["critical_speed_m_per_s"]
                 amplitude.append(Curve([v, v], [0.0, top], f"linear critical speed, {k_legend(row['k_W_per_K'])}", ":"))
-        out.append(Figure(f"bifurcation_valves={'on' if valves else 'off'}.png",
-                          [Panel(amplitude, "speed V [m/s]", "leading wheelset amplitude, last second [mm]",
-                                 "brute force: amplitude after the run"),
-                           Panel(growth, "speed V [m/s]", "growth rate σ [1/s] (> 0: grows)",
-                                 "brute force: growth of the leading wheelset's oscillation",
-                                 hlines=[(0.0, "σ = 0")])],
+        panels = [Panel(amplitude, "speed V [m/s]", "leading wheelset amplitude [mm]",
+                        "bifurcation diagram: brute force (last second), ramp-down (largest over the next second)")]
+        if growth:
+            panels.append(Panel(growth, "speed V [m/s]", "growth rate σ [1/s] (> 0: grows)",
+                                "brute force: growth of the leading wheelset's oscillation", hlines=[(0.0, "σ = 0")]))
+        out.append(Figure(f"bifurcation_valves={'on' if valves else 'off'}.png", panels,
                           f"Nonlinear running stability ({'valves on' if valves else 'valves off'})", 2))
     return out
 

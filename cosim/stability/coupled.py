@@ -66,8 +66,12 @@ class CoupledModel:
     position_coordinates: np.ndarray
 
 
-def couple(car: CarLinearisation, air: CircuitLinearisation | None) -> CoupledModel:
-    """The coupled first-order system (module docstring); ``air`` None freezes the air."""
+def couple(car: CarLinearisation, air: CircuitLinearisation | None,
+           bellow_coupling_N_per_m: np.ndarray | None = None) -> CoupledModel:
+    """The coupled first-order system (module docstring); ``air`` None freezes the air.
+    ``bellow_coupling_N_per_m`` (bellows x bellows, zero diagonal; with ``air`` None): springs
+    between the bellows -- bellow i's force per metre of bellow j's crushing -- for airsprings
+    that share their air (two-point circuits) replaced by a static stiffness matrix."""
     lin = car.system
     n = lin.M.shape[0]
     keep = np.setdiff1d(np.arange(n), car.spin)
@@ -87,6 +91,10 @@ def couple(car: CarLinearisation, air: CircuitLinearisation | None) -> CoupledMo
     r = np.diag(car.maxwell_rate_per_s)
     A[Wl, P] = r @ car.maxwell_deflection @ S
     A[Wl, Wl] = -r
+    if bellow_coupling_N_per_m is not None:             # u = K_c z_b, z_b = Z eta + Z_u u
+        Kc = np.asarray(bellow_coupling_N_per_m, dtype=float)
+        u_per_eta = np.linalg.solve(np.eye(Kc.shape[0]) - Kc @ car.crushing_per_force, Kc @ car.crushing)
+        A[R, P] += Minv @ car.bellow_input @ u_per_eta @ S
     if air is not None:
         A[R, X] = Minv @ car.bellow_input @ air.G_x
         feed = car.crushing_per_force @ air.G_x           # z_b per unit air state (emergency springs)

@@ -10,7 +10,7 @@ results may be cached across k.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, List, Optional, Sequence, Tuple
+from typing import Callable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from cosim.stability.coupled import Mode, couple, modes
 from pneumatics.linear import CircuitLinearisation
 from vehicle.car.linear import CarLinearisation
 
-__all__ = ["SpeedScan", "scan_speeds", "critical_speed", "least_damped", "grows", "DAMPING_TOLERANCE"]
+__all__ = ["SpeedScan", "scan_speeds", "critical_speed", "least_damped", "grows", "modes_at", "DAMPING_TOLERANCE"]
 
 #: a mode grows when its damping ratio is below minus this: the round-off of the central
 #: differences (relative ~1e-8 in the matrices) stays two orders below it, and an undamped
@@ -27,6 +27,9 @@ __all__ = ["SpeedScan", "scan_speeds", "critical_speed", "least_damped", "grows"
 DAMPING_TOLERANCE = 1e-6
 
 CarAt = Callable[[float], CarLinearisation]
+#: what the car is coupled to: the air's linearisation, or None (frozen air) with optional springs
+#: between the bellows (:func:`~cosim.stability.coupled.couple`)
+Air = Union[CircuitLinearisation, None, Tuple[None, np.ndarray]]
 
 
 @dataclass(frozen=True)
@@ -48,17 +51,19 @@ def grows(mode_list: Sequence[Mode]) -> bool:
     return any(m.damping_ratio < -DAMPING_TOLERANCE for m in mode_list)
 
 
-def _modes_at(car_at: CarAt, air: Optional[CircuitLinearisation], v: float) -> List[Mode]:
+def modes_at(car_at: CarAt, air: Air, v: float) -> List[Mode]:
+    if isinstance(air, tuple):
+        return modes(couple(car_at(v), None, air[1]))
     return modes(couple(car_at(v), air))
 
 
-def scan_speeds(car_at: CarAt, air: Optional[CircuitLinearisation], speeds_m_per_s: Sequence[float]) -> SpeedScan:
+def scan_speeds(car_at: CarAt, air: Air, speeds_m_per_s: Sequence[float]) -> SpeedScan:
     """Every mode at each speed (ascending)."""
     speeds = np.sort(np.asarray(speeds_m_per_s, dtype=float))
-    return SpeedScan(speeds, [_modes_at(car_at, air, float(v)) for v in speeds])
+    return SpeedScan(speeds, [modes_at(car_at, air, float(v)) for v in speeds])
 
 
-def critical_speed(car_at: CarAt, air: Optional[CircuitLinearisation], scan: SpeedScan,
+def critical_speed(car_at: CarAt, air: Air, scan: SpeedScan,
                    resolution_m_per_s: float = 0.1) -> Tuple[Optional[float], Tuple[float, float], str]:
     """(critical speed [m/s] or None, its bracket (stable, growing) [m/s], a sentence saying what
     was found). None when no speed of the scan grows (stable up to its last speed) or the first
@@ -73,7 +78,7 @@ def critical_speed(car_at: CarAt, air: Optional[CircuitLinearisation], scan: Spe
     lo, hi = float(speeds[first - 1]), float(speeds[first])
     while hi - lo > resolution_m_per_s:
         mid = 0.5 * (lo + hi)
-        if grows(_modes_at(car_at, air, mid)):
+        if grows(modes_at(car_at, air, mid)):
             hi = mid
         else:
             lo = mid

@@ -6,7 +6,8 @@ starts to grow (the brute-force nonlinear critical speed).
 where the motion is still small: the linear growth, not the saturation of a limit cycle): > 0
 grows, < 0 decays. :func:`onset_speed` interpolates where the growth rate of a list of speeds crosses
 zero. A limit cycle (a grown oscillation saturated by the flange) has a growth rate near zero
-and a large :func:`final_amplitude_m`.
+and a large :func:`final_amplitude_m`. :func:`limit_cycle_end` reads a ramp-down: the time (and
+so the speed) at which a limit cycle's amplitude has fallen to a fraction of what it was.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-__all__ = ["growth_rate_per_s", "final_amplitude_m", "onset_speed"]
+__all__ = ["growth_rate_per_s", "final_amplitude_m", "onset_speed", "envelope", "limit_cycle_end"]
 
 #: peaks below this [m] are round-off, not an oscillation (1 nm)
 PEAK_FLOOR_M = 1e-9
@@ -56,3 +57,29 @@ def onset_speed(speeds_m_per_s: Sequence[float], rates_per_s: Sequence[float]) -
         if r0 < 0.0 <= r1:
             return v0 + (v1 - v0) * (-r0) / (r1 - r0)
     return None
+
+
+def envelope(t_s: np.ndarray, y_m: np.ndarray, window_s: float = 1.0,
+             hop_s: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    """(window starts [s], the largest |y| in each window [m]): windows of ``window_s`` (several
+    hunting periods: 3-8 Hz) every ``hop_s``. A window below a threshold says the oscillation
+    stays below it from the window's start on, for at least a window."""
+    t, a = np.asarray(t_s, float), np.abs(np.asarray(y_m, float))
+    starts = np.arange(t[0], t[-1] - window_s + 1e-12, hop_s)
+    peaks = np.array([a[(t >= s0) & (t < s0 + window_s)].max() for s0 in starts])
+    return starts, peaks
+
+
+def limit_cycle_end(t_s: np.ndarray, y_m: np.ndarray, hold_s: float, fraction: float = 0.05,
+                    window_s: float = 1.0) -> tuple[float, float]:
+    """(the time the limit cycle died [s], its amplitude [m]): the amplitude is the envelope's
+    mean over the windows within the last second of the hold (the car at its start speed); the
+    limit cycle has died at the start of the first window after the hold whose envelope is below
+    ``fraction`` of it (NaN: it never does within the record, or there was no oscillation)."""
+    tc, env = envelope(t_s, y_m, window_s)
+    held = (tc >= hold_s - 1.0) & (tc + window_s <= hold_s + 1e-9)
+    if not held.any():
+        return math.nan, math.nan
+    amplitude = float(env[held].mean())
+    after = np.flatnonzero((tc > hold_s) & (env < fraction * amplitude))
+    return (float(tc[after[0]]) if after.size else math.nan), amplitude

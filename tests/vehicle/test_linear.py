@@ -169,3 +169,38 @@ def test_restrained_wheelset_against_the_classical_linear_solution():
         lo, hi = (lo, mid) if hunting(mid).real > 0.0 else (mid, hi)
     expected = classical.critical_speed(p, flags=classical.FLAGS_ALL)
     assert 0.5 * (lo + hi) == pytest.approx(expected, rel=0.01)
+
+
+def test_speed_profile_is_the_integral_of_its_speed():
+    """v(t) constant, then falling linearly; s(t) its integral (midpoint quadrature to 1e-9)."""
+    from vehicle.speed import SpeedProfile
+    p = SpeedProfile(30.0, hold_s=2.0, deceleration_m_per_s2=1.5)
+    t = np.linspace(0.0, 10.0, 100001)
+    v = p.speed(t)
+    assert v[0] == 30.0 and p.speed(2.0) == 30.0 and p.speed(10.0) == pytest.approx(18.0)
+    assert p.distance(10.0) == pytest.approx(np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(t)), rel=1e-9)
+    assert p.end_s == pytest.approx(22.0) and math.isinf(SpeedProfile(5.0).end_s)
+    with pytest.raises(ValueError, match="deceleration"):
+        SpeedProfile(5.0, deceleration_m_per_s2=-1.0)
+
+
+def test_a_slowing_car_keeps_rolling_on_its_wheels():
+    """The car held at 30 m/s for 1 s, then slowing at 2 m/s^2: the carbody follows v(t) (the drive),
+    the wheelsets follow it (primary suspension) and their wheels roll without slipping at the
+    speed the law now uses (spin r0 within 1e-3 of the wheelset's own speed: creep, not slip;
+    the paper's car has no traction rods, so its bogies swing along the track at ~1.2 Hz on the
+    bellows' shear after the deceleration starts, +-0.3 m/s)."""
+    car = _car(VehicleParams(), speed=30.0)
+    slowing = MetroCar(VehicleParams(), step_s=5e-3, speed_m_per_s=30.0, guidance="contact", deceleration=(1.0, 2.0))
+    slowing.set_bellow_forces(slowing.static_bellow_forces_N(), np.full(4, 5.9e5))
+    sd = slowing.mbs.systemData
+    spin_index = [int(slowing.mbs.GetNodeODE2Index(n)) for n in slowing._spin_nodes]
+    for t in (0.5, 1.0, 2.0, 3.0, 4.0):
+        slowing.advance(t)
+        v = np.array(sd.GetODE2Coordinates_t())
+        assert v[0] == pytest.approx(slowing.speed_profile.speed(t), abs=1e-6)
+        wheelsets = v[[18, 24, 30, 36]]
+        assert np.all(np.abs(wheelsets - slowing.speed_profile.speed(t)) < 0.4)
+        assert np.all(np.abs(v[spin_index] * slowing._wr.r0 / wheelsets - 1.0) < 1e-3)
+    assert slowing._wr.V == pytest.approx(slowing.speed_profile.speed(4.0))
+    assert car.speed_profile.constant

@@ -17,9 +17,9 @@ class StepHooks:
     """Per-step user functions and the track they read."""
 
     def _wheelset_s_m(self, t) -> np.ndarray:
-        """Arc lengths [m] of the wheelsets at time(s) t: s0 + v t, plus each wheelset's own
-        offset along the track with contact guidance (shaped like s0 + v t)."""
-        return self._s0_wheelset + self.speed_m_per_s * t + self._ds_wheelset
+        """Arc lengths [m] of the wheelsets at time(s) t: s0 + s(t) (v t at constant speed), plus
+        each wheelset's own offset along the track with contact guidance (shaped like s0 + v t)."""
+        return self._s0_wheelset + self._distance_m(t) + self._ds_wheelset
 
     def _track_at(self, t: float) -> list[tuple[float, ...]]:
         """Track centre line (x, y, heading, cant, curvature, d(cant)/ds) under each wheelset
@@ -27,7 +27,7 @@ class StepHooks:
         drive holds the carbody)."""
         s = self._wheelset_s_m(t).tolist()
         if self._contact_mode:
-            s.append(self.start_s_m + self.speed_m_per_s * t)
+            s.append(self.start_s_m + self._distance_m(t))
         if self._sampler is None:
             return [(si, 0.0, 0.0, 0.0, 0.0, 0.0) for si in s]
         return self._sampler.at(s)
@@ -120,7 +120,9 @@ class StepHooks:
         if self._guided:  # the offsets predicted at t (the frames may be of t0 or, on a retry, of t)
             ahead = np.asarray(q) + (t - t0) * np.asarray(q_t)
             self._ds_wheelset = (self._ds_wheelset + np.asarray(self._wr.longitudinal_offsets(ahead))
-                                 - self.speed_m_per_s * (t - self._frames_t))
+                                 - (self._distance_m(t) - self._distance_m(self._frames_t)))
+        if not self.speed_profile.constant:          # the law's frames and creepages run at v(t)
+            self._wr.set_speed(self.speed_profile.speed(t))
         state = self._track_at(t)
         if self._guided:
             self._set_guidance(state)

@@ -12,6 +12,7 @@ import numpy as np
 from ..errors import Derailed
 from ..guidance import shared_sampler
 from ..params import ContactParams, TrackStructure, VehicleParams
+from ..speed import SpeedProfile
 from ..track import TrackGeometry
 from ..wheelrail.contact_law import ContactLawTable, WheelsetParams
 from ..wheelrail.track_contact import WheelsetTrackContact
@@ -57,7 +58,11 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
         track: centre line the car runs along; ``None`` = unbounded straight level track along
             x. It must be straight and level under the whole car at the start (the start state
             is the static equilibrium on level track).
-        speed_m_per_s: constant running speed v [m/s] (0 = standing); every body starts at v.
+        speed_m_per_s: running speed v [m/s] (0 = standing); every body starts at v.
+        deceleration: contact guidance only: a :class:`~vehicle.speed.SpeedProfile`'s hold time
+            and deceleration, ``(hold_s, deceleration_m_per_s2)``: the car keeps v for hold_s, then
+            slows down at that rate (the drive, the track frames and the creepages follow v(t));
+            None = constant speed.
         start_s_m: arc length [m] of the car centre (midway between the bogie centres) at
             t = 0. Default: the rear wheelset at s = 0 on a ``track``, 0 without one.
         spectral_radius: generalized-alpha spectral radius at infinite frequency, 0 <= rho <= 1
@@ -116,7 +121,8 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
                  reuse_jacobian: bool = True, carbody_load: bool = False,
                  guidance: str = "kinematic", contact: ContactParams | None = None,
                  irregularity: Callable[[np.ndarray], tuple] | None = None,
-                 wheelset_lateral_offset_m=None, track_structure: TrackStructure | None = None):
+                 wheelset_lateral_offset_m=None, track_structure: TrackStructure | None = None,
+                 deceleration: tuple[float, float] | None = None):
         if guidance not in ("kinematic", "contact"):
             raise ValueError(f"guidance must be 'kinematic' or 'contact', got {guidance!r}")
         if irregularity is not None and not callable(irregularity):
@@ -159,6 +165,11 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
                                     or p.vertical_bumpstop_stiffness_N_per_m > 0.0)
         self._carbody_load = carbody_load
         self._init_run(track, float(speed_m_per_s), start_s_m)
+        #: the speed over time (:class:`~vehicle.speed.SpeedProfile`)
+        self.speed_profile = SpeedProfile(float(max(speed_m_per_s, 0.0)), *(deceleration or (0.0, 0.0)))
+        if deceleration is not None and guidance != "contact":
+            raise ValueError("deceleration needs guidance='contact' (the kinematic guidance prescribes a "
+                             "constant speed)")
         if self._contact_mode:
             self._init_contact(contact or ContactParams())
 
@@ -261,12 +272,21 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
 
     @property
     def s_m(self) -> float:
-        """Arc length [m] of the car centre at the current time: start_s_m + v t."""
-        return self.start_s_m + self.speed_m_per_s * self._t
+        """Arc length [m] of the car centre at the current time: start_s_m + s(t)."""
+        return self.start_s_m + self._distance_m(self._t)
+
+    def _distance_m(self, t):
+        """Distance run since t = 0 [m]: v t at constant speed, else the speed profile's."""
+        return self.speed_m_per_s * t if self.speed_profile.constant else self.speed_profile.distance(t)
 
     @property
     def t_end_max_s(self) -> float:
-        """Latest time [s] the front wheelset is still on the track (inf without a track)."""
+        """Latest time [s] the front wheelset is still on the track (inf without a track; a
+        decelerating car: the time its speed reaches zero at most)."""
+        if not self.speed_profile.constant:
+            if self.track is None:
+                return self.speed_profile.end_s
+            return min(self.speed_profile.end_s, (self.track.total_length_m - self._s0_wheelset[0]) / self.speed_m_per_s)
         v = self.speed_m_per_s
         if self.track is None or v == 0.0:
             return math.inf

@@ -403,7 +403,8 @@ class WheelsetTrackContact:
         self._ref_arr = ref
         self.r0 = float(centre_height_m)
         self.V = float(speed_m_per_s)
-        self.V_ref = max(self.V, float(min_creep_speed_m_per_s))
+        self._V_min = float(min_creep_speed_m_per_s)
+        self.V_ref = max(self.V, self._V_min)
         self.flange_angle_rad = float(flange_angle_rad)
         self.b = law_table.table.contact_half_spacing
         #: coordinates per wheelset: 7 (rigid track) or 10 (flexible track)
@@ -426,6 +427,13 @@ class WheelsetTrackContact:
         return _unpacked_setup(self._setup_row)
 
     # ------------------------------------------------------------------ per step
+    def set_speed(self, speed_m_per_s: float) -> None:
+        """The running speed V for the coming step (a car that slows down): the creepages'
+        reference and the frames' speed; call before :meth:`set_track`."""
+        self.V = float(speed_m_per_s)
+        self.V_ref = max(self.V, self._V_min)
+        self._setup_row[4], self._setup_row[5] = self.V, 1.0 / self.V_ref
+
     def set_track(self, frames: Sequence[tuple], rails=None) -> None:
         """Track frames of the wheelsets for the coming step: ``frames[i] = (x, y, heading,
         cant, curvature, d(cant)/ds)`` of the centre line at wheelset i's arc length (as
