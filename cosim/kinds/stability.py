@@ -63,9 +63,10 @@ class StabilityTest:
 
     Brute force (the nonlinear critical speed; none without ``nonlinear_speeds_m_per_s``): at
     each of those speeds and for each of ``disturbances_m`` (every wheelset released at that
-    lateral offset, at rest), a co-simulated run of ``nonlinear_s`` on the contact; the growth
-    rate of the leading wheelset's oscillation decides whether it grows, its amplitude over the
-    last second is the bifurcation diagram's point.
+    lateral offset, at rest), a co-simulated run of ``nonlinear_s`` on the contact; the car hunts
+    when the leading wheelset's oscillation is still there at the end (its amplitude over the last
+    second, the bifurcation diagram's point, at least half the disturbance); the growth rate of its
+    small oscillation places the onset between the speeds.
 
     Ramp-down (none without ``ramp_from_m_per_s``): the car released at ``ramp_disturbance_m``
     runs ``ramp_hold_s`` at ``ramp_from_m_per_s`` (above the critical speed: it settles on its
@@ -353,7 +354,7 @@ def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str,
     diagnoses of runs that stopped (a derailed car: it grew). The static-stiffness rows get no
     onset: the co-simulation always runs the air circuit."""
     from cosim.kinds.car import simulate_cases
-    from cosim.stability.nonlinear import final_amplitude_m, growth_rate_per_s
+    from cosim.stability.nonlinear import final_amplitude_m, growth_rate_per_s, hunts
     test = scenario.stability
     out, diagnoses = [], []
     for d in test.disturbances_m:
@@ -371,9 +372,11 @@ def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str,
                 rate = growth_rate_per_s(t[ran], y[ran], max_amplitude_m=SMALL_AMPLITUDE_FACTOR * d)
                 if math.isnan(rate) and stopped:
                     rate = math.inf                   # derailed before it could be measured: it grew
+                amplitude = final_amplitude_m(t[ran], y[ran])
                 out.append({"valves": bool(case["valves"].item()), "k_W_per_K": float(case["k_W_per_K"].item()),
                             "speed_m_per_s": float(v), "disturbance_m": float(d), "growth_rate_per_s": rate,
-                            "final_amplitude_m": final_amplitude_m(t[ran], y[ran]), "stopped": stopped})
+                            "final_amplitude_m": amplitude, "hunts": stopped or hunts(amplitude, d),
+                            "stopped": stopped})
     return out, diagnoses
 
 
@@ -437,10 +440,10 @@ def _add_onsets(rows: List[Dict[str, object]], runs: List[Dict[str, object]]) ->
             continue
         mine = [r for r in runs if r["disturbance_m"] == smallest and r["k_W_per_K"] == row["k_W_per_K"]
                 and r["valves"] == row["valves"]]
-        v = onset_speed([r["speed_m_per_s"] for r in mine], [r["growth_rate_per_s"] for r in mine])
+        v, note = onset_speed([r["speed_m_per_s"] for r in mine], [r["growth_rate_per_s"] for r in mine],
+                              [r["hunts"] for r in mine])
         row["nonlinear_onset_m_per_s"] = math.nan if v is None else v
-        row["nonlinear_note"] = ("" if v is not None else
-                                 "no change from decay to growth among the brute-force speeds")
+        row["nonlinear_note"] = note
 
 
 def _centre_conicity(car) -> float:

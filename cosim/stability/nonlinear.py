@@ -16,10 +16,13 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-__all__ = ["growth_rate_per_s", "final_amplitude_m", "onset_speed", "envelope", "limit_cycle_end"]
+__all__ = ["growth_rate_per_s", "final_amplitude_m", "hunts", "onset_speed", "envelope", "limit_cycle_end"]
 
 #: peaks below this [m] are round-off, not an oscillation (1 nm)
 PEAK_FLOOR_M = 1e-9
+#: a hunting run whose fitted growth rate is below this [1/s] sits on its limit cycle already
+#: (fits there give +-5e-4 /s), not growing: its rate says nothing about where the onset is
+SATURATED_BELOW_PER_S = 0.01
 
 
 def growth_rate_per_s(t_s: np.ndarray, y_m: np.ndarray, skip_s: float = 1.0,
@@ -49,14 +52,28 @@ def final_amplitude_m(t_s: np.ndarray, y_m: np.ndarray, window_s: float = 1.0) -
     return float(0.5 * (last.max() - last.min()))
 
 
-def onset_speed(speeds_m_per_s: Sequence[float], rates_per_s: Sequence[float]) -> Optional[float]:
-    """The speed where the growth rate first crosses zero upwards, linearly interpolated between
-    the last speed where it decays and the first where it grows; None without such a pair."""
-    pairs = [(v, r) for v, r in sorted(zip(speeds_m_per_s, rates_per_s)) if not math.isnan(r)]
-    for (v0, r0), (v1, r1) in zip(pairs, pairs[1:]):
-        if r0 < 0.0 <= r1:
-            return v0 + (v1 - v0) * (-r0) / (r1 - r0)
-    return None
+def onset_speed(speeds_m_per_s: Sequence[float], rates_per_s: Sequence[float],
+                hunts: Sequence[bool]) -> tuple[Optional[float], str]:
+    """(the speed where hunting sets in, how it was found): between the last speed where the
+    disturbance dies and the first where the car hunts (``hunts``: its oscillation is still there
+    at the end), where the growth rate crosses zero (linear interpolation), or the bracket's middle
+    when the hunting run sits on a limit cycle already (its small-amplitude growth rate below
+    :data:`SATURATED_BELOW_PER_S`); None when the speeds do not bracket a change."""
+    runs = sorted(zip(speeds_m_per_s, rates_per_s, hunts))
+    if runs and runs[0][2]:
+        return None, f"the car hunts already at {runs[0][0]:g} m/s, the lowest brute-force speed"
+    for (v0, r0, h0), (v1, r1, h1) in zip(runs, runs[1:]):
+        if not h0 and h1:
+            if r0 < 0.0 and r1 > SATURATED_BELOW_PER_S:
+                return v0 + (v1 - v0) * (-r0) / (r1 - r0), f"growth rate crosses zero between {v0:g} and {v1:g} m/s"
+            return 0.5 * (v0 + v1), f"dies at {v0:g}, hunts at {v1:g} m/s (a limit cycle): the middle"
+    return None, "the car hunts at none of the brute-force speeds"
+
+
+def hunts(final_amplitude_m: float, disturbance_m: float) -> bool:
+    """Still hunting at the end of a brute-force run: the oscillation has not fallen below half
+    the disturbance it was released with (a decaying one falls by orders of magnitude)."""
+    return not final_amplitude_m < 0.5 * disturbance_m
 
 
 def envelope(t_s: np.ndarray, y_m: np.ndarray, window_s: float = 1.0,

@@ -268,3 +268,25 @@ def test_ramp_down_follows_the_limit_cycle_below_the_linear_critical_speed(tmp_p
     assert fast < slow < v_lin - 5.0
     assert abs(fast / slow - 1.0) < 0.05
     assert out.rows[0]["limit_cycle_ends_m_per_s"] == slow
+
+
+def test_growth_rate_envelope_and_onset_from_synthetic_records():
+    """The time-history readers on records whose answers are known: a sine growing or decaying at
+    sigma (its fitted rate to 1e-3, the peaks sampled every 2 ms at 5 Hz), saturating at an
+    amplitude (the fit stops at the amplitude bound); a limit cycle that fades linearly from
+    2 mm at t = 10 s to 0 at t = 30 s, read at 5 % of its amplitude (t = 29 s, to the 0.05 s hop);
+    the onset between a dying and a growing run, and between a dying run and a limit cycle."""
+    from cosim.stability.nonlinear import growth_rate_per_s, limit_cycle_end, onset_speed
+    t = np.arange(0.0, 8.0, 0.002)
+    for sigma in (-0.7, 0.4):
+        y = 1e-3 * np.exp(sigma * t) * np.sin(2 * np.pi * 5.0 * t)
+        assert growth_rate_per_s(t, y) == pytest.approx(sigma, rel=1e-3)
+    grown = np.minimum(1e-4 * np.exp(0.8 * t), 5e-3) * np.sin(2 * np.pi * 5.0 * t)
+    assert growth_rate_per_s(t, grown, max_amplitude_m=2e-3) == pytest.approx(0.8, rel=1e-2)
+    t = np.arange(0.0, 35.0, 0.002)
+    fading = 2e-3 * np.clip((30.0 - t) / 20.0, 0.0, 1.0) * np.sin(2 * np.pi * 5.0 * t)
+    t_end, amplitude = limit_cycle_end(t, fading, hold_s=10.0)
+    assert amplitude == pytest.approx(2e-3, rel=1e-3) and t_end == pytest.approx(29.0, abs=0.06)
+    assert onset_speed([50.0, 60.0], [-1.0, 1.0], [False, True])[0] == pytest.approx(55.0)
+    assert onset_speed([27.0, 30.0], [-2.7, 1e-4], [False, True])[0] == pytest.approx(28.5)
+    assert onset_speed([30.0, 36.0], [1e-4, 1e-4], [True, True])[0] is None
