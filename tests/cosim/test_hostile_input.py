@@ -51,6 +51,7 @@ BASES: Dict[str, Callable[[], dict]] = {
     "explicit": lambda: _shipped("twist_throttled_tanks.yaml"),
     "curve": lambda: _shipped("curve_entry.yaml"),
     "irregular": lambda: _shipped("straight_irregular.yaml"),
+    "stability": lambda: _shipped("stability_ramp.yaml"),
 }
 
 
@@ -407,9 +408,24 @@ FAULTS = {  # faults: validated before anything runs (the twist base: 2 s, valve
                                                argv=["--set", "faults[1].t_s=1.0"]),
 }
 
+STABILITY = {  # the stability kind's section
+    "ramp that speeds up": Case("stability", "stability.ramp_to_m_per_s", "slows down",
+                                {"stability.ramp_to_m_per_s": 50.0}),
+    "ramp decelerating at 5 g": Case("stability", "stability.ramp_decelerations_m_per_s2[0]", "m/s^2",
+                                     {"stability.ramp_decelerations_m_per_s2": [50.0]}),
+    "speed in km/h": Case("stability", "stability.speeds_m_per_s[0]", "m/s", {"stability.speeds_m_per_s": [120.0]}),
+    "no speeds": Case("stability", "stability.speeds_m_per_s", "empty", {"stability.speeds_m_per_s": []}),
+    "disturbance in mm": Case("stability", "stability.disturbances_m[0]", "m", {"stability.disturbances_m": [3.0]}),
+    "cone and profile": Case("stability", "stability.wheel_profile", "not both",
+                             {"stability.conicity": 0.2, "stability.wheel_profile": "w.prw"}),
+    "profile file missing": Case("stability", "stability.wheel_profile", "does not exist",
+                                 {"stability.wheel_profile": "worn.prw"}),
+    "conicity of a flange": Case("stability", "stability.conicity", "conicities", {"stability.conicity": 1.2}),
+}
+
 CORPUS = {f"{group}: {name}": case for group, cases in (
     ("numbers", NUMBERS), ("duplicates", DUPLICATES), ("files", FILES), ("keys", KEYS), ("types", TYPES),
-    ("cross-field", CROSS), ("faults", FAULTS)) for name, case in cases.items()}
+    ("cross-field", CROSS), ("faults", FAULTS), ("stability", STABILITY)) for name, case in cases.items()}
 
 
 def test_the_corpus_is_large_enough():

@@ -290,3 +290,19 @@ def test_growth_rate_envelope_and_onset_from_synthetic_records():
     assert onset_speed([50.0, 60.0], [-1.0, 1.0], [False, True])[0] == pytest.approx(55.0)
     assert onset_speed([27.0, 30.0], [-2.7, 1e-4], [False, True])[0] == pytest.approx(28.5)
     assert onset_speed([30.0, 36.0], [1e-4, 1e-4], [True, True])[0] is None
+
+
+def test_a_wheel_profile_file_gives_the_table_derived_from_it(tmp_path):
+    """``wheel_profile``: the S1002 profile given as a file derives the very table the car ships
+    for its 0.42 m wheels (the same pair, rail and setup): the same critical speed."""
+    import shutil
+    from vehicle.wheelrail.geometry import DEFAULT_WHEEL
+    shutil.copy(DEFAULT_WHEEL, tmp_path / "my_wheel.prw")
+    data = {"kind": "stability", "name": "profile", "k_W_per_K": [10], "vehicle": "metro_car_arb_dampers",
+            "circuit": {"layout": "four_point", "preset": "paper_table1", "valves": False},
+            "stability": {"speeds_m_per_s": [35.0, 45.0], "resolution_m_per_s": 0.5}}
+    shipped = run(load_scenario(write_scenario(tmp_path, data)))
+    data["stability"]["wheel_profile"] = "my_wheel.prw"
+    derived = run(load_scenario(write_scenario(tmp_path, data, "profile.yaml")))
+    assert derived.info["contact_table"].endswith(".csv")
+    assert derived.rows[0]["critical_speed_m_per_s"] == pytest.approx(shipped.rows[0]["critical_speed_m_per_s"], rel=1e-9)
