@@ -551,6 +551,8 @@ def _bifurcation_figures(outcome: Outcome) -> List[Figure]:
 
 KIND = Kind("stability", "stability", StabilityTest, __name__, car=True,
             check_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
-            headline_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
+            # the time-domain results move with the steps: verify estimates them too
+            headline_metrics=("critical_speed_m_per_s", "min_damping_ratio", "nonlinear_onset_m_per_s",
+                              "limit_cycle_ends_m_per_s"),
             plot_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
             case_columns=("airspring", "valves", "k_W_per_K"))

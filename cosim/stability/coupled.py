@@ -30,7 +30,7 @@ from scipy.linalg import eig
 from pneumatics.linear import CircuitLinearisation
 from vehicle.car.linear import CarLinearisation
 
-__all__ = ["CoupledModel", "Mode", "couple", "modes", "label", "family", "NEUTRAL_RATE_PER_S"]
+__all__ = ["CoupledModel", "Mode", "couple", "modes", "label", "family", "level_response", "NEUTRAL_RATE_PER_S"]
 
 #: eigenvalues smaller than this [1/s] are neutral (the air mass a closed circuit conserves, time
 #: constants beyond a day): no frequency, no damping, not a mode of running stability
@@ -237,3 +237,28 @@ def modes(model: CoupledModel) -> List[Mode]:
         zeta = float(-lam.real / abs(lam))
         out.append(Mode(complex(lam), float(lam.imag / (2.0 * np.pi)), zeta, label(shares, y, roll), shares))
     return sorted(out, key=lambda m: m.damping_ratio)
+
+
+def level_response(model: CoupledModel, omega_rad_per_s, wheelset_x_m, coordinate: Tuple[str, str]) -> np.ndarray:
+    """The acceleration of one car coordinate (``("carbody", "z")`` ...) per metre of the track's
+    vertical level (both rails), at each circular frequency [1/s^2 per m, complex], the car
+    running at its linearisation's speed V: wheelset i (at ``wheelset_x_m[i]`` ahead of the car
+    centre) meets the level x_i / V before the centre does, so its input is e^(i w x_i / V) times
+    the level under the centre. The car's rail inputs enter as forces (rail_input) and through
+    their rate (rail_rate_input); a ride's floor acceleration and its power spectrum follow
+    (|H|^2 times the level's spectrum at w = V Omega)."""
+    car = model.car
+    j = car.coordinates.index(tuple(coordinate))
+    V = car.speed_m_per_s
+    n = model.A.shape[0]
+    Minv = np.linalg.inv(car.system.M)
+    B, Bd = np.zeros((n, 4)), np.zeros((n, 4))
+    B[model.rates], Bd[model.rates] = Minv @ car.rail_input, Minv @ car.rail_rate_input
+    row = model.rates.start + j
+    out = []
+    for w in np.atleast_1d(np.asarray(omega_rad_per_s, dtype=float)):
+        u = np.exp(1j * w * np.asarray(wheelset_x_m, dtype=float) / V)
+        forcing = (B + 1j * w * Bd) @ u
+        X = np.linalg.solve(1j * w * np.eye(n) - model.A, forcing)
+        out.append(model.A[row] @ X + forcing[row])
+    return np.array(out)

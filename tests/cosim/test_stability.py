@@ -23,7 +23,7 @@ from pneumatics.layouts import static_pressures
 from pneumatics.linear import linearise_circuit
 from pneumatics.pipe import Pipe
 from vehicle.car import MetroCar
-from vehicle.car.linear import linearise_car
+from vehicle.car.linear import _set_law, linearise_car
 from vehicle.linear import ode2_rhs
 
 from helpers import SCENARIOS, write_scenario
@@ -110,9 +110,18 @@ def _nonlinear_rate(car, circuit, x_full0, lin, model, X):
     car._bellow_t = None
     z, zd = car.bellow_crushing()
     if model.air is not None:
+        # the law F_air(x, z_b) to first order about the anchor z_b0: F_air(x, z_b0) + G_z (z_b - z_b0);
+        # with an emergency spring in series the bellow's own crushing rate depends on the rate of
+        # the air's force too: a fixed point, dF/dt from the circuit's derivatives
         x[model.air.index] += X[model.pneumatic]
-        car._bellow_t = None
-        car.set_bellow_forces(circuit.bellow_forces_N(x, z), np.diag(model.air.G_z), np.zeros(4))
+        F, rate = circuit.bellow_forces_N(x, car._lin_z0), np.zeros(4)
+        for _ in range(4 if car.airspring_in_series else 1):
+            _set_law(car, F, np.diag(model.air.G_z), car._lin_z0, rate)
+            z, zd = car.bellow_crushing()
+            xdot = circuit.derivatives(x, z, zd)
+            eps = 1e-3
+            rate = (circuit.bellow_forces_N(x + eps * xdot, car._lin_z0)
+                    - circuit.bellow_forces_N(x - eps * xdot, car._lin_z0)) / (2 * eps)
     eta_dd = np.linalg.solve(sys.M, sys.N.T @ ode2_rhs(mbs, solver))
     out.append(eta_dd)
     get = mbs.GetObjectOutput
@@ -123,14 +132,17 @@ def _nonlinear_rate(car, circuit, x_full0, lin, model, X):
     return np.concatenate(out)
 
 
-@pytest.mark.parametrize("preset, with_air", [("paper_metro_car", True), ("metro_car_arb_dampers", False)])
+@pytest.mark.parametrize("preset, with_air", [("paper_metro_car", True), ("metro_car_arb_dampers", False),
+                                              ("metro_car_arb_dampers", True)])
 def test_coupled_linearisation_is_the_derivative_of_the_nonlinear_system(tmp_path, preset, with_air):
     """A d for random directions d against central differences of the nonlinear coupled rate
     (:func:`_nonlinear_rate`) at +-d, d small enough for the remainder and large enough to be a
     derivative of the real functions, not of the linearisation's own differences (positions 1e-7 m
     and rates 1e-5 m/s, 10 and 10 times the linearisation's steps; air 1e-6 of its state). The
     paper's car with its four-point circuit (k = 10: every air term alive), and the car with
-    dampers (Maxwell elements, emergency springs) with the air frozen. Measured: at most ~3e-6 of
+    dampers (Maxwell elements, emergency springs in series with the bellows) with the air frozen
+    and with its circuit. (The last case was added after the PSD check of the ride found the
+    bellow input of in-series airsprings wrong: its differences had moved the law's anchor.) Measured: at most ~3e-6 of
     the largest entry of each block of A d, falling as d shrinks (positions 1e-6 m gave 6e-5: the
     Hertz contacts' nonlinearity over d); tolerance 1e-4."""
     s = _scenario(tmp_path, speeds_m_per_s=[30.0])
@@ -143,6 +155,7 @@ def test_coupled_linearisation_is_the_derivative_of_the_nonlinear_system(tmp_pat
     lin = linearise_car(car, F0, np.diag(air.G_z))
     car._lin_q0 = np.array(car.mbs.systemData.GetODE2Coordinates())
     car._lin_v0 = np.array(car.mbs.systemData.GetODE2Coordinates_t())
+    car._lin_z0 = np.array([law[3] for law in car._bellow_law])
     model = couple(lin, air if with_air else None)
     rng = np.random.default_rng(3)
     size = model.A.shape[0]
@@ -296,6 +309,7 @@ def test_a_wheel_profile_file_gives_the_table_derived_from_it(tmp_path):
     """``wheel_profile``: the S1002 profile given as a file derives the very table the car ships
     for its 0.42 m wheels (the same pair, rail and setup): the same critical speed."""
     import shutil
+
     from vehicle.wheelrail.geometry import DEFAULT_WHEEL
     shutil.copy(DEFAULT_WHEEL, tmp_path / "my_wheel.prw")
     data = {"kind": "stability", "name": "profile", "k_W_per_K": [10], "vehicle": "metro_car_arb_dampers",
@@ -306,3 +320,39 @@ def test_a_wheel_profile_file_gives_the_table_derived_from_it(tmp_path):
     derived = run(load_scenario(write_scenario(tmp_path, data, "profile.yaml")))
     assert derived.info["contact_table"].endswith(".csv")
     assert derived.rows[0]["critical_speed_m_per_s"] == pytest.approx(shipped.rows[0]["critical_speed_m_per_s"], rel=1e-9)
+
+
+def test_floor_acceleration_rms_against_the_linearised_model(tmp_path):
+    """The car with dampers at 20 m/s over ERRI B176 (low) vertical level alone, 40 s record, k = 10,
+    valves isolated: the rms vertical floor acceleration at the car centre from the time domain
+    against the linearised car and circuit (cosim/stability) driven by the level's spectrum,
+    sigma^2 = integral |H(V Omega)|^2 S(Omega) dOmega over the generated band, each wheelset meeting
+    the level x_i / V before the centre. Measured 0.0427 against 0.0422 m/s^2 (1 %); asked 10 %.
+    The generator's amplitudes are the spectrum's own (random phases only), so the record's
+    rms scatters little around the prediction. (This check found the linearisation's bellow input
+    wrong for airsprings with an emergency spring in series: the prediction had been 19 % high.)"""
+    from cosim.kinds.stability import _air, _Cars, contact_params, make_car
+    from cosim.stability.coupled import level_response
+    from vehicle.irregularities import psd
+    V, k = 20.0, 10.0
+    data = yaml.safe_load((SCENARIOS / "ride_comfort.yaml").read_text())
+    data["k_W_per_K"] = [k]
+    data["ride"].update(speeds_m_per_s=[V], record_s=40.0, valve_settings=[False])
+    data["ride"]["irregularity"]["channels"] = ["vertical"]
+    data.pop("checks", None)
+    out = run(load_scenario(write_scenario(tmp_path, data)))
+    ds = out.series[f"ride_v={V:g}"]
+    az = ds["floor_az_m_per_s2"].sel(floor_point="centre").isel(case=0).values
+    measured = np.std(az[ds["time"].values >= out.rows[0]["record_from_s"]])
+    linear = {**data, "kind": "stability", "stability": {"speeds_m_per_s": [V]}, "solver": {"jobs": 1}}
+    linear.pop("ride")
+    s = load_scenario(write_scenario(tmp_path, linear, "linear.yaml"))
+    car = make_car(s, V)
+    F0 = car.static_bellow_forces_N()
+    air = _air(s, False, k, F0)
+    model = couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.stability, s.vehicle))(V), air)
+    shortest, longest = data["ride"]["irregularity"]["wavelength_range_m"]
+    omega = np.linspace(2 * np.pi / longest, 2 * np.pi / shortest, 20001)
+    H = level_response(model, omega * V, car.wheelset_x_m, ("carbody", "z"))
+    predicted = np.sqrt(np.trapezoid(np.abs(H) ** 2 * psd("erri_b176_low", "vertical", omega), omega))
+    assert measured == pytest.approx(predicted, rel=0.10)

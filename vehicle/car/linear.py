@@ -63,6 +63,11 @@ class CarLinearisation:
     maxwell_rate_per_s : (m,) array
         k_s / c1: y' = k_s / c1 (d - y) [1/s].
     maxwell_names : list of str
+    rail_input : (n, 4) array
+        Generalized force per metre of vertical rail motion under each wheelset (both of its rails
+        up: the track's vertical level) [N/m, N m/m].
+    rail_rate_input : (n, 4) array
+        Generalized force per m/s of that motion's rate [N s/m, N m s/m].
     residual_N : float
         The largest reduced force (moment) left at the steady state [N, N m].
     reaction_N : float
@@ -80,6 +85,8 @@ class CarLinearisation:
     maxwell_deflection: np.ndarray
     maxwell_rate_per_s: np.ndarray
     maxwell_names: List[str]
+    rail_input: np.ndarray
+    rail_rate_input: np.ndarray
     residual_N: float
     reaction_N: float
     speed_m_per_s: float
@@ -133,6 +140,23 @@ def _reaction(car, N: np.ndarray) -> float:
     return float(np.max(np.abs(lam)))
 
 
+def _set_law(car, F, K, z_n, F_rate=(0.0,) * 4) -> None:
+    """The bellow force laws F + K (z_b - z_n) with the crushing z_n they are anchored at given
+    (:meth:`MetroCar.set_bellow_forces` anchors them at the current crushing, which with an
+    emergency spring in series moves with the law itself: varying F through it would move the
+    anchor with every call). ``F_rate``: dF/dt at fixed crushing [N/s] (the rate of the bellow's
+    own crushing follows it when an emergency spring is in series)."""
+    for (Fv, Kv, Fdv, z0v), Fk, Kk, zk, rk in zip(car._bellow_vars, F, K, z_n, F_rate):
+        Fv.SetValue(float(Fk))
+        Kv.SetValue(float(Kk))
+        Fdv.SetValue(float(rk))
+        z0v.SetValue(float(zk))
+    car._t_set.SetValue(car._t)
+    car._t_set_s = car._t
+    car._bellow_law = [(float(Fk), float(Kk), float(rk), float(zk)) for Fk, Kk, zk, rk in zip(F, K, z_n, F_rate)]
+    car._bellow_t = None
+
+
 def _crushing(car) -> np.ndarray:
     car._bellow_t = None                                  # the cache is per time; the state moved
     return car.bellow_crushing()[0]
@@ -170,11 +194,12 @@ def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m) -> CarLinearisa
 
     B = np.empty((N.shape[1], 4))
     Zu = np.empty((4, 4))
+    anchor = [law[3] for law in car._bellow_law]       # z_n of the law: every variation keeps it
     for k in range(4):
         def apply(sign, k=k):
             F = F0.copy()
             F[k] += sign * FORCE_STEP_N
-            car.set_bellow_forces(F, Kb, np.zeros(4))
+            _set_law(car, F, Kb, anchor)
         apply(+1.0)
         z_plus = _crushing(car)
         apply(-1.0)
@@ -206,5 +231,26 @@ def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m) -> CarLinearisa
             d.y_sym.SetValue(d.y + sign * h)
         W[:, i] = force_difference(apply) / (2.0 * h)
     rates = np.array([d.k_s / d.c1 for d in maxwell])
-    return CarLinearisation(lin, coordinates, B, Z, Zu, W, Wd, rates, [d.name for d in maxwell],
+    rail, rail_rate = _rail_inputs(car, force_difference)
+    return CarLinearisation(lin, coordinates, B, Z, Zu, W, Wd, rates, [d.name for d in maxwell], rail, rail_rate,
                             residual, _reaction(car, N), float(car.speed_m_per_s))
+
+
+#: central-difference steps of the rails' vertical motion [m] and rate [m/s]
+RAIL_STEP_M, RAIL_RATE_STEP_M_PER_S = 1e-7, 1e-5
+
+
+def _rail_inputs(car, force_difference) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 4) generalized forces per metre and per m/s of both rails of each wheelset moving up
+    (central differences of the contact law through its rails' offsets and rates)."""
+    frames = car._track_at(car._t)[:4]
+    columns = ([], [])
+    for which, h in ((2, RAIL_STEP_M), (3, RAIL_RATE_STEP_M_PER_S)):
+        for i in range(4):
+            def apply(sign, i=i, which=which, h=h):
+                side = [0.0, 0.0, 0.0, 0.0]
+                side[which] = sign * h
+                car._wr.set_track(frames, [(tuple(side), tuple(side)) if j == i else ((0.0,) * 4, (0.0,) * 4)
+                                           for j in range(4)])
+            columns[which - 2].append(force_difference(apply) / (2.0 * h))
+    return np.array(columns[0]).T, np.array(columns[1]).T
