@@ -351,8 +351,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
 def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str, object]], List[str]]:
     """Every brute-force run (speed x disturbance x k x valve setting, co-simulated): per run the
     leading wheelset's growth rate and final amplitude (:mod:`cosim.stability.nonlinear`), and the
-    diagnoses of runs that stopped (a derailed car: it grew). The static-stiffness rows get no
-    onset: the co-simulation always runs the air circuit."""
+    diagnoses of runs that stopped (a derailed car: it grew)."""
     from cosim.kinds.car import simulate_cases
     from cosim.stability.nonlinear import final_amplitude_m, growth_rate_per_s, hunts
     test = scenario.stability
@@ -419,9 +418,8 @@ def _add_ramp_ends(rows: List[Dict[str, object]], ramps: List[Dict[str, object]]
     """The ramp-down's result in each circuit row: the speed where the limit cycle died at the
     smallest deceleration, and how far the other decelerations' results lie from it."""
     for row in rows:
-        if row["airspring"] != "circuit":
-            row["limit_cycle_ends_m_per_s"] = row["limit_cycle_ends_spread_m_per_s"] = math.nan
-            continue
+        if row["airspring"] != "circuit":                # the ramp runs the circuit: no value (not NaN,
+            continue                                     # which verify would count as a failure)
         mine = sorted((r["deceleration_m_per_s2"], r["limit_cycle_ends_m_per_s"]) for r in ramps
                       if r["k_W_per_K"] == row["k_W_per_K"] and r["valves"] == row["valves"])
         row["limit_cycle_ends_m_per_s"] = mine[0][1]
@@ -430,13 +428,13 @@ def _add_ramp_ends(rows: List[Dict[str, object]], ramps: List[Dict[str, object]]
 
 
 def _add_onsets(rows: List[Dict[str, object]], runs: List[Dict[str, object]]) -> None:
-    """The brute-force onset (smallest disturbance) in each circuit row: where the growth rate
-    crosses zero between the speeds (None: NaN, with the reason in ``nonlinear_note``)."""
+    """The brute-force onset (smallest disturbance) in each circuit row (the static-stiffness rows
+    get none: the co-simulation always runs the air circuit): :func:`onset_speed`, NaN when the
+    speeds do not bracket it, with how it was found in ``nonlinear_note``."""
     from cosim.stability.nonlinear import onset_speed
     smallest = min(r["disturbance_m"] for r in runs)
     for row in rows:
-        if row["airspring"] != "circuit":
-            row["nonlinear_onset_m_per_s"], row["nonlinear_note"] = math.nan, "the brute force runs the air circuit"
+        if row["airspring"] != "circuit":                # the brute force runs the circuit
             continue
         mine = [r for r in runs if r["disturbance_m"] == smallest and r["k_W_per_K"] == row["k_W_per_K"]
                 and r["valves"] == row["valves"]]
