@@ -231,6 +231,7 @@ def test_contact_pair_keys_are_checked(tmp_path):
         load_scenario(write_scenario(tmp_path, data))
 
 
+@pytest.mark.slow
 def test_brute_force_onset_on_a_cone_agrees_with_the_linear_critical_speed(tmp_path):
     """The car with dampers on a 0.2 cone (linear critical speed 54.49 m/s): released at 0.5 mm, the
     co-simulated car's hunting dies at 5 % below the linear critical speed and grows at 5 % above,
@@ -261,6 +262,7 @@ def test_brute_force_onset_on_a_cone_agrees_with_the_linear_critical_speed(tmp_p
     assert below["growth_rate_per_s"] == pytest.approx(sigma, rel=0.05)
 
 
+@pytest.mark.slow
 def test_ramp_down_follows_the_limit_cycle_below_the_linear_critical_speed(tmp_path):
     """The car with dampers on S1002 / UIC60, released at 3 mm at 45 m/s (above its linear critical
     speed, 40.3 m/s), settles on a hunting limit cycle (~1.8 mm at the leading wheelset) and keeps
@@ -305,6 +307,7 @@ def test_growth_rate_envelope_and_onset_from_synthetic_records():
     assert onset_speed([30.0, 36.0], [1e-4, 1e-4], [True, True])[0] is None
 
 
+@pytest.mark.slow
 def test_a_wheel_profile_file_gives_the_table_derived_from_it(tmp_path):
     """``wheel_profile``: the S1002 profile given as a file derives the very table the car ships
     for its 0.42 m wheels (the same pair, rail and setup): the same critical speed."""
@@ -322,6 +325,7 @@ def test_a_wheel_profile_file_gives_the_table_derived_from_it(tmp_path):
     assert derived.rows[0]["critical_speed_m_per_s"] == pytest.approx(shipped.rows[0]["critical_speed_m_per_s"], rel=1e-9)
 
 
+@pytest.mark.slow
 def test_floor_acceleration_rms_against_the_linearised_model(tmp_path):
     """The car with dampers at 20 m/s over ERRI B176 (low) vertical level alone, 40 s record, k = 10,
     valves isolated: the rms vertical floor acceleration at the car centre from the time domain
