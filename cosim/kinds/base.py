@@ -19,6 +19,8 @@ Functions a kind module provides (``Kind.module`` names it; imported when needed
 * ``zones(experiment) -> (zone, ...)``: the track's test zones (kinds with ``zone_metrics``);
 * ``refuse_check(metric, experiment) -> reason or None``: a checkable metric the scenario's
   experiment cannot give (e.g. lateral wheel forces without wheel-rail contact);
+  ``refuse_limit(metric, op, limit, experiment) -> reason or None``: a limit it cannot decide
+  (e.g. a critical speed above the speeds it scans);
 * ``compare(infos, out_dir, select, label, window) -> [Path]``: overlays of several runs' time
   series (optional: without it ``compare`` says the kind has none).
 """

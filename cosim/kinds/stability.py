@@ -173,6 +173,15 @@ def refuse_check(metric: str, test: StabilityTest) -> Optional[str]:
     return None
 
 
+def refuse_limit(metric: str, op: str, limit: float, test: StabilityTest) -> Optional[str]:
+    """A lower limit on the critical speed above the scan's last speed cannot be shown (a car stable
+    over the whole scan reports inf, which would pass it)."""
+    if metric == "critical_speed_m_per_s" and op in (">=", ">") and limit > max(test.speeds_m_per_s):
+        return (f"the scan ends at {max(test.speeds_m_per_s):g} m/s (stability.speeds_m_per_s): a critical speed "
+                f"above it cannot be shown; extend the speeds to {limit:g} m/s or beyond")
+    return None
+
+
 def contact_table_csv(test: StabilityTest, vehicle: VehicleParams) -> str:
     """The contact table the test asks for, as a CSV file (kept in the temporary folder under its
     content's hash); "" for the default S1002 / UIC60 table."""

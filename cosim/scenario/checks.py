@@ -70,8 +70,10 @@ def parse_checks(value, kind, experiment, file, k_values: Sequence[float] = (),
     :mod:`cosim.limits.assessment`). ``kind``:
     the scenario's :class:`~cosim.kinds.base.Kind` (its ``check_metrics`` and ``wheel_metrics``;
     its module's ``refuse_check(metric, experiment)`` refuses a metric the experiment cannot give,
-    e.g. lateral wheel forces without wheel-rail contact)."""
+    e.g. lateral wheel forces without wheel-rail contact, and ``refuse_limit(metric, op, limit,
+    experiment)`` a limit it cannot decide, e.g. a critical speed above the speeds it scans)."""
     refuse = getattr(kind.code, "refuse_check", lambda metric, experiment: None)
+    refuse_limit = getattr(kind.code, "refuse_limit", lambda metric, op, limit, experiment: None)
     if not isinstance(value, list):
         raise ScenarioError(file, ["checks"], f"expected a list like ['dqq_max <= 0.6'], got {type(value).__name__}")
     out = []
@@ -85,7 +87,7 @@ def parse_checks(value, kind, experiment, file, k_values: Sequence[float] = (),
         if metric not in kind.check_metrics:
             raise ScenarioError(file, where, f"unknown metric {metric!r} for a {kind.name} scenario "
                                              f"(known: {', '.join(kind.check_metrics)})")
-        reason = refuse(metric, experiment)
+        reason = refuse(metric, experiment) or refuse_limit(metric, op, limit, experiment)
         if reason:
             raise ScenarioError(file, where, reason)
         chosen: Dict[str, Any] = {}

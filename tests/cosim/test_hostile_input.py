@@ -421,6 +421,8 @@ STABILITY = {  # the stability kind's section
     "profile file missing": Case("stability", "stability.wheel_profile", "does not exist",
                                  {"stability.wheel_profile": "worn.prw"}),
     "conicity of a flange": Case("stability", "stability.conicity", "conicities", {"stability.conicity": 1.2}),
+    "critical speed above the scan": Case("stability", "checks[0]", "scan ends at 50 m/s",
+                                          {"checks": ["critical_speed_m_per_s >= 60"]}),
 }
 
 CORPUS = {f"{group}: {name}": case for group, cases in (
