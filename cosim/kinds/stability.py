@@ -18,6 +18,7 @@ default pair.
 """
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import tempfile
@@ -135,13 +136,8 @@ def parse(data, vehicle: VehicleParams, path: Path) -> StabilityTest:
         file = Path(path).parent / test.wheel_profile
         if not file.is_file():
             raise ScenarioError(path, ["stability", "wheel_profile"], f"the wheel profile {str(file)!r} does not exist")
-        test = _replace(test, wheel_profile=str(file))
+        test = dataclasses.replace(test, wheel_profile=str(file))
     return test
-
-
-def _replace(test: StabilityTest, **changes) -> StabilityTest:
-    import dataclasses
-    return dataclasses.replace(test, **changes)
 
 
 def duration_s(test: StabilityTest) -> float:
