@@ -42,6 +42,18 @@ class SpeedProfile:
         ramp = np.maximum(np.asarray(t_s, float) - self.hold_s, 0.0)
         return self.v0_m_per_s * t_s - 0.5 * self.deceleration_m_per_s2 * ramp * ramp
 
+    def time_at_distance(self, distance_m: float) -> float:
+        """The time the car has run ``distance_m`` [s] (:attr:`end_s` if it stops before)."""
+        v0, hold, a = self.v0_m_per_s, self.hold_s, self.deceleration_m_per_s2
+        if distance_m <= v0 * hold:
+            return distance_m / v0 if v0 > 0.0 else 0.0
+        if self.constant:
+            return distance_m / v0 if v0 > 0.0 else math.inf
+        if distance_m >= self.distance(self.end_s):
+            return self.end_s
+        rest = distance_m - v0 * hold                      # v0 r - a r^2 / 2 = rest, the smaller root
+        return hold + (v0 - math.sqrt(v0 * v0 - 2.0 * a * rest)) / a
+
     @property
     def end_s(self) -> float:
         """The time the speed reaches 0 (inf for a constant speed) [s]."""

@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import math
+import os
 import tempfile
 import time
 from dataclasses import dataclass
@@ -106,7 +107,8 @@ class StabilityTest:
         "ramp_from_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most"),
         "ramp_to_m_per_s": Range(0.0, 100.0, False, True, "m/s", "> 0: the creepages are relative to the speed"),
         "ramp_decelerations_m_per_s2": Range(1e-3, 2.0, unit="m/s^2", why="slow: the limit cycle must follow the speed"),
-        "ramp_hold_s": Range(0.0, 600.0, unit="s", why="the time to settle on the limit cycle"),
+        "ramp_hold_s": Range(1.0, 600.0, unit="s", why="the time to settle on the limit cycle; its last second "
+                                                      "gives the limit cycle's amplitude"),
         "ramp_disturbance_m": Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)"),
     }
     FIELD_LIST_RULES = {"speeds_m_per_s": (True, True), "valve_settings": (True, True),
@@ -172,9 +174,10 @@ def refuse_check(metric: str, test: StabilityTest) -> Optional[str]:
 def refuse_limit(metric: str, op: str, limit: float, test: StabilityTest) -> Optional[str]:
     """A lower limit on the critical speed above the scan's last speed cannot be shown (a car stable
     over the whole scan reports inf, which would pass it)."""
-    if metric == "critical_speed_m_per_s" and op in (">=", ">") and limit > max(test.speeds_m_per_s):
-        return (f"the scan ends at {max(test.speeds_m_per_s):g} m/s (stability.speeds_m_per_s): a critical speed "
-                f"above it cannot be shown; extend the speeds to {limit:g} m/s or beyond")
+    last = max(*test.speeds_m_per_s, test.reference_speed)
+    if metric == "critical_speed_m_per_s" and op in (">=", ">") and limit > last:
+        return (f"the scan ends at {last:g} m/s (stability.speeds_m_per_s): a critical speed above it cannot be "
+                f"shown; extend the speeds to {limit:g} m/s or beyond")
     return None
 
 
@@ -195,8 +198,10 @@ def contact_table_csv(test: StabilityTest, vehicle: VehicleParams) -> str:
     text = table.to_csv()
     file = Path(tempfile.gettempdir()) / "pneumorail_tables" / f"{hashlib.sha256(text.encode()).hexdigest()[:16]}.csv"
     file.parent.mkdir(parents=True, exist_ok=True)
-    if not file.exists():
-        file.write_text(text)
+    if not file.exists():                                  # whole or not at all (a killed write leaves no table)
+        partial = file.with_suffix(f".{os.getpid()}.part")
+        partial.write_text(text)
+        os.replace(partial, file)
     return str(file)
 
 
@@ -334,8 +339,9 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         _add_onsets(rows, tables["nonlinear"])
     cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, math.nan) for m in KIND.check_metrics})
              for r in rows if r["airspring"] == "circuit"]
-    metrics = {"critical_speed_m_per_s": min(r["critical_speed_m_per_s"] for r in rows if r["airspring"] == "circuit"),
-               "min_damping_ratio": min(r["min_damping_ratio"] for r in rows if r["airspring"] == "circuit")}
+    circuit_rows = [r for r in rows if r["airspring"] == "circuit"]
+    metrics = {m: float(np.min([r[m] for r in circuit_rows]))            # NaN when one case has none
+               for m in ("critical_speed_m_per_s", "min_damping_ratio")}
     info = {"contact_table": contact.table_csv or "S1002 / UIC60 1:40 (shipped)",
             "conicity_at_centre": _centre_conicity(probe),
             "equivalent_conicity_3mm": float(table.equivalent_conicity(0.003)),
@@ -371,7 +377,7 @@ def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str,
             for j in range(ds.sizes["case"]):
                 case = ds.isel(case=j)
                 y = case["wheelset_lateral_m"].isel(wheelset=0).values
-                ran = np.isfinite(y)
+                ran = np.isfinite(y)                 # a run that stopped holds NaN from then on
                 stopped = not ran.all()
                 rate = growth_rate_per_s(t[ran], y[ran], max_amplitude_m=SMALL_AMPLITUDE_FACTOR * d)
                 if math.isnan(rate) and stopped:
@@ -459,8 +465,9 @@ def _centre_conicity(car) -> float:
 
 def _critical_columns(cars, air, scan, v_crit, bracket, note) -> Dict[str, object]:
     """The critical speed's columns of a summary row (see :func:`run`): the speed (inf: stable over
-    the whole scan; the scan's lowest speed when a mode grows already there, an upper bound), and
-    the least damped mode where it grows (at the bracket's growing end, or the lowest speed)."""
+    the whole scan; NaN when a mode grows already at the lowest speed -- the critical speed lies
+    below the scan, unknown, and a check on it fails), and the least damped mode where it grows (at
+    the bracket's growing end, or the lowest speed)."""
     from cosim.stability.critical import least_damped, modes_at
     lowest = min((m.damping_ratio for ms in scan.modes for m in ms), default=math.nan)
     out = {"min_damping_ratio": lowest, "critical_note": note}
@@ -468,7 +475,7 @@ def _critical_columns(cars, air, scan, v_crit, bracket, note) -> Dict[str, objec
         out.update(critical_speed_m_per_s=math.inf, critical_mode="", critical_frequency_Hz=math.nan)
         return out
     m = least_damped(modes_at(cars, air, bracket[1]))
-    out.update(critical_speed_m_per_s=bracket[1] if v_crit is None else v_crit, critical_mode=m.label,
+    out.update(critical_speed_m_per_s=math.nan if v_crit is None else v_crit, critical_mode=m.label,
                critical_frequency_Hz=m.frequency_Hz)
     return out
 

@@ -31,6 +31,8 @@ def growth_rate_per_s(t_s: np.ndarray, y_m: np.ndarray, skip_s: float = 1.0,
     first that exceeds ``max_amplitude_m``; NaN with fewer than 4 such peaks (no oscillation to
     judge). y oscillates about 0 (the track centre line)."""
     t, y = np.asarray(t_s, float), np.asarray(y_m, float)
+    if t.size < 3:
+        return math.nan
     keep = t >= t[0] + skip_s
     t, a = t[keep], np.abs(y[keep])
     if a.size < 3:
@@ -46,8 +48,10 @@ def growth_rate_per_s(t_s: np.ndarray, y_m: np.ndarray, skip_s: float = 1.0,
 
 
 def final_amplitude_m(t_s: np.ndarray, y_m: np.ndarray, window_s: float = 1.0) -> float:
-    """Half the peak-to-peak range of y over the last ``window_s`` of the record [m]."""
+    """Half the peak-to-peak range of y over the last ``window_s`` of the record [m] (NaN: no record)."""
     t, y = np.asarray(t_s, float), np.asarray(y_m, float)
+    if t.size == 0:
+        return math.nan
     last = y[t >= t[-1] - window_s]
     return float(0.5 * (last.max() - last.min()))
 
@@ -58,13 +62,14 @@ def onset_speed(speeds_m_per_s: Sequence[float], rates_per_s: Sequence[float],
     disturbance dies and the first where the car hunts (``hunts``: its oscillation is still there
     at the end), where the growth rate crosses zero (linear interpolation), or the bracket's middle
     when the hunting run sits on a limit cycle already (its small-amplitude growth rate below
-    :data:`SATURATED_BELOW_PER_S`); None when the speeds do not bracket a change."""
+    :data:`SATURATED_BELOW_PER_S`) or left the track before its growth could be measured (inf);
+    None when the speeds do not bracket a change."""
     runs = sorted(zip(speeds_m_per_s, rates_per_s, hunts))
     if runs and runs[0][2]:
         return None, f"the car hunts already at {runs[0][0]:g} m/s, the lowest brute-force speed"
     for (v0, r0, h0), (v1, r1, h1) in zip(runs, runs[1:]):
         if not h0 and h1:
-            if r0 < 0.0 and r1 > SATURATED_BELOW_PER_S:
+            if r0 < 0.0 and SATURATED_BELOW_PER_S < r1 < math.inf:   # inf: derailed before it was measured
                 return v0 + (v1 - v0) * (-r0) / (r1 - r0), f"growth rate crosses zero between {v0:g} and {v1:g} m/s"
             return 0.5 * (v0 + v1), f"dies at {v0:g}, hunts at {v1:g} m/s (a limit cycle): the middle"
     return None, "the car hunts at none of the brute-force speeds"
@@ -80,23 +85,28 @@ def envelope(t_s: np.ndarray, y_m: np.ndarray, window_s: float = 1.0,
              hop_s: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
     """(window starts [s], the largest |y| in each window [m]): windows of ``window_s`` (several
     hunting periods: 3-8 Hz) every ``hop_s``. A window below a threshold says the oscillation
-    stays below it from the window's start on, for at least a window."""
+    stays below it from the window's start on, for at least a window. A window without samples
+    (samples sparser than the window) is NaN; a record shorter than a window gives none."""
     t, a = np.asarray(t_s, float), np.abs(np.asarray(y_m, float))
+    if t.size == 0:
+        return np.zeros(0), np.zeros(0)
     starts = np.arange(t[0], t[-1] - window_s + 1e-12, hop_s)
-    peaks = np.array([a[(t >= s0) & (t < s0 + window_s)].max() for s0 in starts])
-    return starts, peaks
+    peaks = np.array([a[(t >= s0) & (t < s0 + window_s)].max(initial=-1.0) for s0 in starts])
+    return starts, np.where(peaks < 0.0, math.nan, peaks)
 
 
 def limit_cycle_end(t_s: np.ndarray, y_m: np.ndarray, hold_s: float, fraction: float = 0.05,
                     window_s: float = 1.0) -> tuple[float, float]:
-    """(the time the limit cycle died [s], its amplitude [m]): the amplitude is the envelope's
-    mean over the windows within the last second of the hold (the car at its start speed); the
-    limit cycle has died at the start of the first window after the hold whose envelope is below
-    ``fraction`` of it (NaN: it never does within the record, or there was no oscillation)."""
-    tc, env = envelope(t_s, y_m, window_s)
-    held = (tc >= hold_s - 1.0) & (tc + window_s <= hold_s + 1e-9)
-    if not held.any():
+    """(the time the limit cycle died [s], its amplitude [m]): the amplitude is the largest |y| over
+    the last ``window_s`` of the hold (the car at its start speed, on its limit cycle); the limit
+    cycle has died at the start of the first window after the hold whose envelope is below
+    ``fraction`` of it (NaN: it never does within the record, or the record has no hold of a
+    window to read the amplitude from)."""
+    t, y = np.asarray(t_s, float), np.asarray(y_m, float)
+    held = (t >= hold_s - window_s) & (t <= hold_s)
+    if t.size == 0 or t[0] > hold_s - window_s + 1e-9 or not held.any():
         return math.nan, math.nan
-    amplitude = float(env[held].mean())
+    amplitude = float(np.abs(y[held]).max())
+    tc, env = envelope(t, y, window_s)
     after = np.flatnonzero((tc > hold_s) & (env < fraction * amplitude))
     return (float(tc[after[0]]) if after.size else math.nan), amplitude

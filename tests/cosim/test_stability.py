@@ -291,7 +291,7 @@ def test_growth_rate_envelope_and_onset_from_synthetic_records():
     amplitude (the fit stops at the amplitude bound); a limit cycle that fades linearly from
     2 mm at t = 10 s to 0 at t = 30 s, read at 5 % of its amplitude (t = 29 s, to the 0.05 s hop);
     the onset between a dying and a growing run, and between a dying run and a limit cycle."""
-    from cosim.stability.nonlinear import growth_rate_per_s, limit_cycle_end, onset_speed
+    from cosim.stability.nonlinear import final_amplitude_m, growth_rate_per_s, limit_cycle_end, onset_speed
     t = np.arange(0.0, 8.0, 0.002)
     for sigma in (-0.7, 0.4):
         y = 1e-3 * np.exp(sigma * t) * np.sin(2 * np.pi * 5.0 * t)
@@ -305,6 +305,15 @@ def test_growth_rate_envelope_and_onset_from_synthetic_records():
     assert onset_speed([50.0, 60.0], [-1.0, 1.0], [False, True])[0] == pytest.approx(55.0)
     assert onset_speed([27.0, 30.0], [-2.7, 1e-4], [False, True])[0] == pytest.approx(28.5)
     assert onset_speed([30.0, 36.0], [1e-4, 1e-4], [True, True])[0] is None
+    assert onset_speed([50.0, 60.0], [-1.0, math.inf], [False, True])[0] == pytest.approx(55.0)   # derailed
+    # a hold off the envelope's grid, a record starting later, empty and sparse records
+    t_end, amplitude = limit_cycle_end(t + 0.013, fading, hold_s=10.37)
+    assert amplitude == pytest.approx(2e-3, rel=2e-2) and t_end == pytest.approx(29.013, abs=0.06)
+    assert all(math.isnan(v) for v in limit_cycle_end(t, fading, hold_s=0.5))    # no second of hold
+    assert math.isnan(growth_rate_per_s([], [])) and math.isnan(final_amplitude_m([], []))
+    from cosim.stability.nonlinear import envelope
+    _, sparse = envelope(np.arange(0.0, 10.0, 2.0), np.ones(5))
+    assert np.isnan(sparse).any() and not (sparse < 0.5).any()
 
 
 @pytest.mark.slow
@@ -360,3 +369,18 @@ def test_floor_acceleration_rms_against_the_linearised_model(tmp_path):
     H = level_response(model, omega * V, car.wheelset_x_m, ("carbody", "z"))
     predicted = np.sqrt(np.trapezoid(np.abs(H) ** 2 * psd("erri_b176_low", "vertical", omega), omega))
     assert measured == pytest.approx(predicted, rel=0.10)
+
+
+def test_a_car_unstable_at_every_scanned_speed_fails_a_critical_speed_check(tmp_path):
+    """A 0.4 cone scanned at 90 m/s only (hunting grows there): the critical speed lies below the
+    scan, unknown: NaN, said in the note, and a lower limit on it fails (reporting the lowest speed
+    would have passed ``>= 50``)."""
+    data = {"kind": "stability", "name": "fast", "k_W_per_K": [10], "vehicle": "metro_car_arb_dampers",
+            "circuit": {"layout": "four_point", "preset": "paper_table1", "valves": False},
+            "stability": {"speeds_m_per_s": [90.0], "conicity": 0.4},
+            "checks": ["critical_speed_m_per_s >= 50"]}
+    out = run(load_scenario(write_scenario(tmp_path, data)))
+    row = next(r for r in out.rows if r["airspring"] == "circuit")
+    assert math.isnan(row["critical_speed_m_per_s"]) and "already at 90" in row["critical_note"]
+    assert "hunting" in row["critical_mode"]
+    assert not out.checks_hold()

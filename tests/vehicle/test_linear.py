@@ -180,6 +180,9 @@ def test_speed_profile_is_the_integral_of_its_speed():
     assert v[0] == 30.0 and p.speed(2.0) == 30.0 and p.speed(10.0) == pytest.approx(18.0)
     assert p.distance(10.0) == pytest.approx(np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(t)), rel=1e-9)
     assert p.end_s == pytest.approx(22.0) and math.isinf(SpeedProfile(5.0).end_s)
+    for d in (10.0, 60.0, 100.0, 300.0):                         # the time it has run d
+        assert p.distance(p.time_at_distance(d)) == pytest.approx(d, rel=1e-12)
+    assert p.time_at_distance(1e4) == p.end_s                    # it stops before
     with pytest.raises(ValueError, match="deceleration"):
         SpeedProfile(5.0, deceleration_m_per_s2=-1.0)
 

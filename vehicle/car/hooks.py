@@ -120,7 +120,7 @@ class StepHooks:
         if self._guided:  # the offsets predicted at t (the frames may be of t0 or, on a retry, of t)
             ahead = np.asarray(q) + (t - t0) * np.asarray(q_t)
             self._ds_wheelset = (self._ds_wheelset + np.asarray(self._wr.longitudinal_offsets(ahead))
-                                 - (self._distance_m(t) - self._distance_m(self._frames_t)))
+                                 - self._distance_between_m(self._frames_t, t))
         if not self.speed_profile.constant:          # the law's frames and creepages run at v(t)
             self._wr.set_speed(self.speed_profile.speed(t))
         state = self._track_at(t)

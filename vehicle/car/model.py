@@ -279,6 +279,13 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
         """Distance run since t = 0 [m]: v t at constant speed, else the speed profile's."""
         return self.speed_m_per_s * t if self.speed_profile.constant else self.speed_profile.distance(t)
 
+    def _distance_between_m(self, t0: float, t1: float) -> float:
+        """Distance run from t0 to t1 [m]: v (t1 - t0) at constant speed (rounded as it always was:
+        a constant-speed run stays the same bit for bit), else the speed profile's."""
+        if self.speed_profile.constant:
+            return self.speed_m_per_s * (t1 - t0)
+        return self.speed_profile.distance(t1) - self.speed_profile.distance(t0)
+
     @property
     def t_end_max_s(self) -> float:
         """Latest time [s] the front wheelset is still on the track (inf without a track; a
@@ -286,7 +293,7 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
         if not self.speed_profile.constant:
             if self.track is None:
                 return self.speed_profile.end_s
-            return min(self.speed_profile.end_s, (self.track.total_length_m - self._s0_wheelset[0]) / self.speed_m_per_s)
+            return self.speed_profile.time_at_distance(self.track.total_length_m - self._s0_wheelset[0])
         v = self.speed_m_per_s
         if self.track is None or v == 0.0:
             return math.inf
