@@ -142,6 +142,8 @@ def largest(values) -> float:
 
 
 def _cell(v) -> str:
+    if v is None:                                  # a column this row does not have
+        return "-"
     if isinstance(v, float):
         return "inf" if math.isinf(v) else f"{v:.5g}"
     return str(v)
