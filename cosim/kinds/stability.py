@@ -184,15 +184,13 @@ def refuse_limit(metric: str, op: str, limit: float, test: StabilityTest) -> Opt
 def contact_table_csv(test: StabilityTest, vehicle: VehicleParams) -> str:
     """The contact table the test asks for, as a CSV file (kept in the temporary folder under its
     content's hash); "" for the default S1002 / UIC60 table."""
-    from vehicle.wheelrail.geometry import DEFAULT_RAIL, ContactTable  # exudyn-free, but heavy
+    from vehicle.wheelrail.derive_table import derive_default  # exudyn-free, but heavy
+    from vehicle.wheelrail.geometry import ContactTable
     r0 = float(vehicle.wheel_radius_m)
     if test.conicity is not None:
         table = ContactTable.cone(test.conicity, r0_m=r0)
     elif test.wheel_profile is not None:
-        table = ContactTable.from_profiles(test.wheel_profile, DEFAULT_RAIL, gauge_m=1.435, inclination=1.0 / 40.0,
-                                           rail_profile_inclined=True, flange_back_distance_m=1.360,
-                                           flange_back_pos_mm=-70.0, nominal_radius_m=r0, tape_circle_y_mm=0.0,
-                                           gauge_height_mm=14.0, y_max_mm=12.0, dy_mm=0.1)
+        table = derive_default(r0, wheel_file=test.wheel_profile)
     else:
         return ""
     text = table.to_csv()
@@ -307,15 +305,21 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     F0 = probe.static_bellow_forces_N()
     table = probe.contact_table
     rows, mode_rows = [], []
-    circuit_cars = None
+    linearised: Dict[tuple, _Cars] = {}                # the car's linearisations by its bellows' stiffness:
+                                                       # frozen air and static (isothermal for k > 0) repeat over k
+
+    def cars_for(K_b: np.ndarray) -> _Cars:
+        key = tuple(np.round(K_b, 3))                   # [N/m]
+        if key not in linearised:
+            linearised[key] = _Cars(scenario, F0, K_b, contact)
+        return linearised[key]
+
     for valves in test.valve_settings:
         for k in scenario.k_W_per_K:
             air = _air(scenario, valves, k, F0)
-            if circuit_cars is None:                   # the frozen-air stiffness: the same for every k
-                circuit_cars = _Cars(scenario, F0, np.diag(air.G_z), contact)
             K_static = static_stiffness_N_per_m(air)
             for model in AIRSPRINGS:
-                cars = circuit_cars if model == "circuit" else _Cars(scenario, F0, np.diag(K_static), contact)
+                cars = cars_for(np.diag(air.G_z) if model == "circuit" else np.diag(K_static))
                 coupled_air = air if model == "circuit" else (None, K_static - np.diag(np.diag(K_static)))
                 scan = scan_speeds(cars, coupled_air, speeds)
                 v_crit, bracket, note = critical_speed(cars, coupled_air, scan, test.resolution_m_per_s)

@@ -23,7 +23,7 @@ from pneumatics.layouts import static_pressures
 from pneumatics.linear import linearise_circuit
 from pneumatics.pipe import Pipe
 from vehicle.car import MetroCar
-from vehicle.car.linear import _set_law, linearise_car
+from vehicle.car.linear import linearise_car
 from vehicle.linear import ode2_rhs
 
 from helpers import SCENARIOS, write_scenario
@@ -116,7 +116,7 @@ def _nonlinear_rate(car, circuit, x_full0, lin, model, X):
         x[model.air.index] += X[model.pneumatic]
         F, rate = circuit.bellow_forces_N(x, car._lin_z0), np.zeros(4)
         for _ in range(4 if car.airspring_in_series else 1):
-            _set_law(car, F, np.diag(model.air.G_z), car._lin_z0, rate)
+            car.set_bellow_forces(F, np.diag(model.air.G_z), rate, z_anchor_m=car._lin_z0)
             z, zd = car.bellow_crushing()
             xdot = circuit.derivatives(x, z, zd)
             eps = 1e-3
@@ -197,12 +197,15 @@ def test_stability_run_gives_critical_speeds_modes_and_figures(tmp_path):
                                                             if r["airspring"] == "circuit")
     assert results["min_damping_ratio >= 0"] < 0.0 and not out.checks_hold()
     assert {m["mode"] for m in out.tables["modes"]} >= {"carbody bounce", "carbody pitch", "carbody yaw"}
+    from cosim.kinds.stability import figures
+    assert [f.name for f in figures(out)] == ["stability_valves=off_circuit.png", "stability_valves=off_static.png"]
+    assert all(len(f.panels) == 4 for f in figures(out))     # per k: root locus, damping against speed
 
 
 def test_the_least_damped_modes_are_labelled_by_what_moves(tmp_path):
-    """At 10 m/s the car with dampers has its textbook modes: carbody bounce 1.1 Hz, pitch 1.3 Hz,
-    lower sway below upper... in frequency order upper sway (rolling about a point below the body)
-    lowest; every mode below 20 Hz stable; a pneumatic mode among them."""
+    """At 10 m/s the car with dampers has its textbook modes, named from their kinetic energy:
+    carbody bounce, pitch, yaw, lower and upper sway (the upper sway, rolling about a point below
+    the body, the lower in frequency) and an air mode; every mode below 20 Hz stable."""
     s = _scenario(tmp_path, speeds_m_per_s=[10.0])
     from cosim.kinds.stability import _air, _Cars, contact_params, make_car
     car = make_car(s, 10.0)

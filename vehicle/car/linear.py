@@ -123,10 +123,10 @@ def _set(mbs, q=None, v=None) -> None:
         mbs.systemData.SetODE2Coordinates_t(v, cfg)
 
 
-def steady_state(car) -> float:
+def steady_state(car, names=None) -> float:
     """Move the car's current state to steady running on straight track (module docstring);
-    returns the largest reduced force left [N, N m]."""
-    names = _coordinate_names(car)
+    returns the largest reduced force left [N, N m]. ``names``: :func:`_coordinate_names` of the car."""
+    names = names or _coordinate_names(car)
     spins = [i for i, (_, axis) in enumerate(names) if axis == "spin"]
     return generic_steady_state(car.mbs, car._solver, spins)
 
@@ -138,23 +138,6 @@ def _reaction(car, N: np.ndarray) -> float:
         return 0.0
     lam = np.linalg.lstsq(C.T, ode2_rhs(car.mbs, car._solver), rcond=None)[0]
     return float(np.max(np.abs(lam)))
-
-
-def _set_law(car, F, K, z_n, F_rate=(0.0,) * 4) -> None:
-    """The bellow force laws F + K (z_b - z_n) with the crushing z_n they are anchored at given
-    (:meth:`MetroCar.set_bellow_forces` anchors them at the current crushing, which with an
-    emergency spring in series moves with the law itself: varying F through it would move the
-    anchor with every call). ``F_rate``: dF/dt at fixed crushing [N/s] (the rate of the bellow's
-    own crushing follows it when an emergency spring is in series)."""
-    for (Fv, Kv, Fdv, z0v), Fk, Kk, zk, rk in zip(car._bellow_vars, F, K, z_n, F_rate):
-        Fv.SetValue(float(Fk))
-        Kv.SetValue(float(Kk))
-        Fdv.SetValue(float(rk))
-        z0v.SetValue(float(zk))
-    car._t_set.SetValue(car._t)
-    car._t_set_s = car._t
-    car._bellow_law = [(float(Fk), float(Kk), float(rk), float(zk)) for Fk, Kk, zk, rk in zip(F, K, z_n, F_rate)]
-    car._bellow_t = None
 
 
 def _crushing(car) -> np.ndarray:
@@ -178,10 +161,10 @@ def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m) -> CarLinearisa
         for d in car._maxwell:
             d.y_sym.SetValue(d.y)
             d.ydot_sym.SetValue(0.0)
-    residual = steady_state(car)
+    names = _coordinate_names(car)
+    residual = steady_state(car, names)
     lin = linearise(mbs, solver)
     N = lin.N
-    names = _coordinate_names(car)
     coordinates = [names[j] for j in lin.independent]
 
     def force_difference(apply) -> np.ndarray:
@@ -199,7 +182,7 @@ def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m) -> CarLinearisa
         def apply(sign, k=k):
             F = F0.copy()
             F[k] += sign * FORCE_STEP_N
-            _set_law(car, F, Kb, anchor)
+            car.set_bellow_forces(F, Kb, None, z_anchor_m=anchor)
         apply(+1.0)
         z_plus = _crushing(car)
         apply(-1.0)

@@ -320,7 +320,7 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
         return self._t
 
     def set_bellow_forces(self, F_N: np.ndarray, dF_dz_N_per_m: np.ndarray | None = None,
-                          dF_dt_N_per_s: np.ndarray | None = None) -> None:
+                          dF_dt_N_per_s: np.ndarray | None = None, z_anchor_m: np.ndarray | None = None) -> None:
         """Airspring force laws for the following :meth:`advance`, each (4,) in :data:`BELLOWS`
         order.
 
@@ -333,19 +333,27 @@ class MetroCar(CarBuild, StepHooks, JacobianReuse, CarOutputs):
         current state: pass the force the previous law reached at t_now and the force stays
         continuous in time across calls.
 
+        ``z_anchor_m``: the crushing z_now the law is anchored at, given instead of the current one
+        (a linearisation varies F_N about a fixed state: with an emergency spring in series the
+        current crushing moves with the law itself, so each call would move the anchor).
+
         Note: a jump of F_N between calls enters generalized-alpha with about half an internal
         step of delay (the step starts from the old acceleration)."""
         F, dF, Fdot = (_four_floats(v) for v in (F_N, dF_dz_N_per_m, dF_dt_N_per_s))
         if not all(map(math.isfinite, F + dF + Fdot)):
             raise ValueError(f"non-finite bellow force law: F={F}, dF/dz={dF}, dF/dt={Fdot}")
-        self._bellow_state()
-        for (Fv, Kv, Fdv, z0v), Fk, Kk, Fdk, zk in zip(self._bellow_vars, F, dF, Fdot, self._z.tolist()):
+        if z_anchor_m is None:
+            self._bellow_state()
+            anchor = self._z.tolist()
+        else:
+            anchor = _four_floats(z_anchor_m)
+        for (Fv, Kv, Fdv, z0v), Fk, Kk, Fdk, zk in zip(self._bellow_vars, F, dF, Fdot, anchor):
             Fv.SetValue(Fk)
             Kv.SetValue(Kk)
             Fdv.SetValue(Fdk)
             z0v.SetValue(zk)
         self._t_set.SetValue(self._t)
-        self._bellow_law = list(zip(F, dF, Fdot, self._z.tolist()))
+        self._bellow_law = list(zip(F, dF, Fdot, anchor))
         self._t_set_s = self._t
         if self.airspring_in_series:
             self._bellow_t = None  # the new law splits the same total crushing anew

@@ -20,9 +20,10 @@ import numpy as np
 from .geometry import COLUMNS, DEFAULT_RAIL, DEFAULT_WHEEL, ContactTable, table_path
 
 
-def derive_default(nominal_radius_m: float = 0.46) -> ContactTable:
-    """The S1002 / UIC60 1:40 / 1435 mm table for wheels of ``nominal_radius_m`` (tape circle)."""
-    return ContactTable.from_profiles(DEFAULT_WHEEL, DEFAULT_RAIL, gauge_m=1.435,
+def derive_default(nominal_radius_m: float = 0.46, wheel_file=DEFAULT_WHEEL) -> ContactTable:
+    """The S1002 / UIC60 1:40 / 1435 mm table for wheels of ``nominal_radius_m`` (tape circle); with
+    ``wheel_file`` another wheel profile (a worn one) on the same rail and setup."""
+    return ContactTable.from_profiles(wheel_file, DEFAULT_RAIL, gauge_m=1.435,
                                       inclination=1.0 / 40.0, rail_profile_inclined=True,
                                       flange_back_distance_m=1.360, flange_back_pos_mm=-70.0,
                                       nominal_radius_m=nominal_radius_m, tape_circle_y_mm=0.0,
