@@ -99,10 +99,15 @@ class Sample:
 def _per_car(method: str, n=None) -> Callable[[Sample], np.ndarray]:
     """A car output (``MetroCar.<method>()``: shape ``n``, a scalar for n None) stacked over the
     cases, zeros for a stopped case (it becomes NaN in the record)."""
+    shape = () if n is None else tuple(np.atleast_1d(n))
+
     def read(sample: Sample) -> np.ndarray:
-        values = [np.asarray(getattr(car, method)(), dtype=float) if active else np.zeros(n or ())
-                  for car, active in zip(sample.sim.cars, sample.sim.active)]
-        return np.stack(values, axis=-1)
+        cars, active = sample.sim.cars, sample.sim.active
+        out = np.zeros(shape + (len(cars),))
+        for j, car in enumerate(cars):
+            if active[j]:
+                out[..., j] = getattr(car, method)()
+        return out
     return read
 
 
@@ -231,6 +236,9 @@ class CoSimulation:
         self.watch = watch
         self._watch_every = max(1, round(StateWatch.INTERVAL_S / macro_step_s))
         self._steps = 0
+        #: the circuit's evaluation at the current (x, z) when a sample has computed it (the
+        #: next macro-step's force laws start from the same state), else None
+        self._sampled = None
         #: [(time, circuit from then on)] of the faults still to happen, by time
         times = sorted({f.t_s for f in circuit.faults})
         self._faults = [(t, circuit.with_active_faults([i for i, f in enumerate(circuit.faults) if f.t_s <= t]))
@@ -294,6 +302,7 @@ class CoSimulation:
         x1[:, ~self.active] = self.x[:, ~self.active]  # stopped cases stay frozen
         self._F_end = F_start + self.H * F_rate + K * (z1 - self.z)  # what the cars feel at t1
         self.x, self.t, self.z, self.zd = x1, t1, z1, zd1
+        self._sampled = None
 
     def _force_laws(self):
         """The bellow force laws of this step (see the module docstring), each (4, cases):
@@ -307,7 +316,7 @@ class CoSimulation:
         if self.coupling != "linearised":
             zero = np.zeros_like(F_now)
             return F_now, zero, zero, c.derivatives(self.x, self.z, self.zd)
-        rate, held_rate = c.derivatives_and_held(self.x, self.z, self.zd)
+        rate, held_rate = c.derivatives_and_held(self.x, self.z, self.zd, self._sampled)
         half = 0.5 * self.H
         dF_dt = (c.bellow_forces_N(self.x + half * held_rate, self.z) - F_now) / half
         K = c.bellow_stiffness_N_per_m(self.x, self.z)
@@ -358,14 +367,17 @@ class CoSimulation:
         """Append the current state's :data:`OUTPUTS` to ``record`` (NaN for a stopped case; the
         contact outputs only when the cars run on the wheel-rail contact)."""
         c = self.circuit
-        now = Sample(self, c.outputs(self.x, self.z), c.valve_air_kg(self.x), c.valve_open_time_s(self.x))
+        self._sampled = c.evaluate(self.x, self.z)     # the next macro-step starts from it
+        now = Sample(self, c.outputs(self.x, self.z, self._sampled), c.valve_air_kg(self.x), c.valve_open_time_s(self.x))
         stopped = ~self.active
+        any_stopped = bool(stopped.any())
         record.t_s.append(self.t)
         for output in OUTPUTS:
             if output.contact and not self.contact:
                 continue
             values = np.array(output.read(now), dtype=float)
-            values[..., stopped] = np.nan
+            if any_stopped:
+                values[..., stopped] = np.nan
             record.values[output.name].append(values)
 
     def run(self, t_end_s: float, output_interval_s: float,

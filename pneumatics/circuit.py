@@ -232,6 +232,24 @@ class ValveSides(NamedTuple):
     exhaust: np.ndarray
 
 
+class Evaluation(NamedTuple):
+    """:meth:`Circuit.evaluate`: the circuit at one state and crushing, each (rows, cases):
+    chamber masses, temperatures, volumes, pressures; node pressures, temperatures, densities
+    (chambers, then boundary nodes); link flows; the valves' lever chain (or None); the valves'
+    conductances (supply sides, then exhaust)."""
+
+    m: np.ndarray
+    T: np.ndarray
+    V: np.ndarray
+    p: np.ndarray
+    p_n: np.ndarray
+    T_n: np.ndarray
+    rho_n: np.ndarray
+    w: np.ndarray
+    chain: Optional[tuple]
+    C_valve: np.ndarray
+
+
 @dataclass(frozen=True)
 class CircuitOutputs:
     """Everything observable at one instant (arrays: chambers or links first, cases last)."""
@@ -298,6 +316,7 @@ class Circuit:
         self._any_isothermal = bool(np.any(self._isothermal))
         self._k_finite = np.where(self._isothermal, 0.0, self.k_W_per_K)
         self._boundary_columns = {}
+        self._outflow_signs = {}  # mass_from's link signs by node (cached)
         self._classify()
         self._check_faults()
         self._compile_links()
@@ -770,13 +789,15 @@ class Circuit:
         self._write_crushing_rate_terms(dx, x2, terms, zdot2)
         return dx.reshape(x.shape)
 
-    def derivatives_and_held(self, x, z_m, zdot_m_per_s) -> tuple[np.ndarray, np.ndarray]:
+    def derivatives_and_held(self, x, z_m, zdot_m_per_s, evaluated: "Evaluation | None" = None
+                             ) -> tuple[np.ndarray, np.ndarray]:
         """(d(state)/dt, d(state)/dt at zero crushing rate): the latter is ``derivatives(x, z_m, 0)``
         bit for bit, from the same evaluation of the flows (they depend on the crushing only, not
         on its rate); only the rows that the rate enters (temperatures through p dV/dt, heat and
-        work accumulators, valve signals) are computed twice."""
+        work accumulators, valve signals) are computed twice. ``evaluated``: :meth:`evaluate` at
+        this very (x, z_m), when the caller has it already (the same numbers, not computed again)."""
         x2, z2, zdot2 = self._inputs(x, z_m, zdot_m_per_s)
-        dx, terms = self._rates_at_crushing(x2, z2)
+        dx, terms = self._rates_at_crushing(x2, z2, evaluated)
         held = dx.copy()
         self._write_crushing_rate_terms(dx, x2, terms, zdot2)
         self._write_crushing_rate_terms(held, x2, terms, np.zeros_like(zdot2))
@@ -787,12 +808,12 @@ class Circuit:
         x2 = x.reshape(self.layout.size, -1)
         return x2, self._per_bellow(z_m, x2), self._per_bellow(zdot_m_per_s, x2)
 
-    def _rates_at_crushing(self, x2: np.ndarray, z2: np.ndarray):
+    def _rates_at_crushing(self, x2: np.ndarray, z2: np.ndarray, evaluated: "Evaluation | None" = None):
         """The rows of d(state)/dt that depend on the state and the crushing only (chamber masses,
         pipe flows, link mass, boundary enthalpy, valve open times), and the terms the other rows
         need: (dx with those rows written, (m, T, p, mdot, Hdot, chain))."""
         lay = self.layout
-        m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = self._evaluate(x2, z2)
+        m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = evaluated or self._evaluate(x2, z2)
         a, b = self._a, self._b
         Hw = w * (self.gas.cp_J_per_kgK * np.where(w >= 0.0, T_n[a], T_n[b]))  # upstream total enthalpy
         mdot = self._incidence @ w                                                # eq. (1)
@@ -829,11 +850,20 @@ class Circuit:
         if self._valve_dynamics:
             dx[self._s_valve] = self._valve_signal_rates(x2, chain, zdot2)
 
-    def outputs(self, x, z_m) -> CircuitOutputs:
-        """Pressures, temperatures, masses, volumes, link flows and bellow forces (eq. 4)."""
+    def evaluate(self, x, z_m) -> "Evaluation":
+        """The circuit at state ``x`` and crushing ``z_m`` (pressures, volumes, flows: everything
+        but the terms of the crushing rate), to hand to :meth:`outputs` and
+        :meth:`derivatives_and_held` at this same (x, z_m), which then do not compute it again
+        (the co-simulation samples a state and starts the next macro-step from it). Read only."""
+        x2 = x.reshape(self.layout.size, -1)
+        return Evaluation(*self._evaluate(x2, self._per_bellow(z_m, x2)))
+
+    def outputs(self, x, z_m, evaluated: "Evaluation | None" = None) -> CircuitOutputs:
+        """Pressures, temperatures, masses, volumes, link flows and bellow forces (eq. 4).
+        ``evaluated``: :meth:`evaluate` at this very (x, z_m), if the caller has it."""
         x2 = x.reshape(self.layout.size, -1)
         z2 = self._per_bellow(z_m, x2)
-        m, T, V, p, _, _, _, w, _, _ = self._evaluate(x2, z2)
+        m, T, V, p, _, _, _, w, _, _ = evaluated or self._evaluate(x2, z2)
         F = self.bellow_forces_N(x2, z2)
         squeeze = (lambda v: v[:, 0]) if x.ndim == 1 else (lambda v: v)
         return CircuitOutputs(*(squeeze(v) for v in (p, T, m, V, w, F)))
@@ -893,9 +923,12 @@ class Circuit:
     def mass_from(self, x, node: str) -> np.ndarray:
         """Cumulative mass that left boundary node ``node`` into the circuit (negative: received)
         [kg], through every link but the faults' openings (:meth:`air_lost_kg` counts those)."""
-        i = self._node_index[node]
-        sign = (self._a == i).astype(float) - (self._b == i).astype(float)
-        sign[self.fault_links] = 0.0
+        sign = self._outflow_signs.get(node)
+        if sign is None:
+            i = self._node_index[node]
+            sign = (self._a == i).astype(float) - (self._b == i).astype(float)
+            sign[self.fault_links] = 0.0
+            self._outflow_signs[node] = sign
         return sign @ x[self.layout.mass_through]
 
     def link_ends(self) -> list:

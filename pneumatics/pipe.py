@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .compiled import elementwise
+
 
 @dataclass(frozen=True)
 class Pipe:
@@ -38,9 +40,11 @@ class Pipe:
         return self.friction_factor * self.length_m / self.diameter_m + self.zeta
 
 
+@elementwise(7)
 def pipe_flow_rate_kg_per_s2(q_kg_per_s, p_a_Pa, p_b_Pa, rho_kg_per_m3, length_m, area_m2, loss_coefficient):
-    """Eq. (5): dq/dt = A/L ((p_a - p_b) - (lambda L/d + zeta) q |q| / (2 rho A^2))."""
-    drop = loss_coefficient * q_kg_per_s * np.abs(q_kg_per_s) / (2.0 * rho_kg_per_m3 * area_m2 ** 2)
+    """Eq. (5): dq/dt = A/L ((p_a - p_b) - (lambda L/d + zeta) q |q| / (2 rho A^2)). Arrays
+    broadcast (compiled, :mod:`pneumatics.compiled`)."""
+    drop = loss_coefficient * q_kg_per_s * abs(q_kg_per_s) / (2.0 * rho_kg_per_m3 * (area_m2 * area_m2))
     return area_m2 / length_m * ((p_a_Pa - p_b_Pa) - drop)
 
 

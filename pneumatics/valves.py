@@ -23,6 +23,8 @@ from typing import Tuple
 import numpy as np
 from scipy.special import gammainc
 
+from .compiled import arrays
+
 #: Sonic conductance of a fully open levelling valve [m^3/(s Pa)]. Assumed: a large railway
 #: levelling valve passes about 1000 l/min ANR, ~0.02 kg/s choked from a 9 bar reservoir, i.e.
 #: C ~ 2e-8; half of that is taken, for a valve whose lever is not fully deflected in normal service.
@@ -136,14 +138,17 @@ class DifferentialPressureValve:
     q_kg_per_s: Tuple[float, ...] = (0.0, 0.0, 0.02)
 
 
+@arrays
 def lever_conductance(lever_m, table_lever_m, table_C):
-    """Sonic conductance at lever displacement ``lever_m``: > 0 may open this side (beyond the
-    table's dead band); <= 0 keeps it shut."""
+    """Sonic conductance at lever displacement ``lever_m`` (an array): > 0 may open this side
+    (beyond the table's dead band); <= 0 keeps it shut. Compiled (:mod:`pneumatics.compiled`)."""
     return np.interp(np.maximum(lever_m, 0.0), table_lever_m, table_C) * (lever_m > 0.0)
 
 
+@arrays
 def differential_valve_flow_kg_per_s(p_a_Pa, p_b_Pa, table_dp_Pa, table_q):
-    """Signed flow from a to b: sign(p_a - p_b) q(|p_a - p_b|); antisymmetric by construction."""
+    """Signed flow from a to b (arrays): sign(p_a - p_b) q(|p_a - p_b|); antisymmetric by
+    construction. Compiled (:mod:`pneumatics.compiled`)."""
     dp = p_a_Pa - p_b_Pa
     return np.sign(dp) * np.interp(np.abs(dp), table_dp_Pa, table_q)
 

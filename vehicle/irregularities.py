@@ -2,7 +2,7 @@
 as functions of the distance s along the track, read from a CSV file or generated from a
 one-sided power spectral density (ERRI B176 low/high level, FRA classes 1-6) with a seed.
 
-Pure numpy/scipy; no exudyn, no ``pneumatics``/``cosim`` imports. Nothing here is switched on by
+Pure numpy/scipy (the evaluation compiled by numba where available); no exudyn, no ``pneumatics``/``cosim`` imports. Nothing here is switched on by
 itself: a model that wants irregularities builds a :class:`TrackIrregularity` and evaluates it.
 User documentation with the formulas, coefficients and their sources: ``docs/track_irregularities.md``.
 
@@ -122,6 +122,8 @@ from typing import NamedTuple, Sequence, Union
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
+
+from .wheelrail.compiled import kernel
 
 __all__ = [
     "CHANNELS",
@@ -287,6 +289,32 @@ def _as_array(name: str, values, n: int | None) -> np.ndarray:
     return a
 
 
+@kernel(__file__)
+def _piecewise_cubic_at(x, c, s):
+    """A piecewise cubic (scipy's ``PPoly``: breakpoints ``x``, coefficients ``c`` (4, intervals,
+    columns), highest power first) at the points ``s`` (1-D), zero outside [x[0], x[-1]] and at
+    NaN: (points, columns). The same arithmetic as ``PPoly.__call__`` (interval x[i] <= s <
+    x[i+1], the last one closed; sum of c[3 - k] d^k with d = s - x[i] and d^k accumulated), so
+    the same numbers, bit for bit, without its per-call cost (the car evaluates the track's
+    irregularities at every internal step)."""
+    n_cols = c.shape[2]
+    out = np.zeros((s.size, n_cols))
+    lo, hi = x[0], x[-1]
+    for n in range(s.size):
+        sv = s[n]
+        if not (lo <= sv <= hi):
+            continue
+        i = min(np.searchsorted(x, sv, side="right") - 1, x.size - 2)
+        d = sv - x[i]
+        for j in range(n_cols):
+            res, z = 0.0, 1.0
+            for k in range(c.shape[0]):
+                res = res + c[c.shape[0] - 1 - k, i, j] * z
+                z = z * d
+            out[n, j] = res
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class TrackIrregularity:
     """Sampled irregularities over s [m]; all values in metres (signs: module docstring).
@@ -324,9 +352,7 @@ class TrackIrregularity:
     def __call__(self, s_m) -> IrregularityValues:
         """(lateral_m, vertical_m, cross_level_m, gauge_m) at s [m]; zero outside the range."""
         s = np.asarray(s_m, dtype=float)
-        lo, hi = self.s_m[0], self.s_m[-1]
-        v = self._spline(np.clip(s, lo, hi))
-        v = np.where(((s >= lo) & (s <= hi))[..., None], v, 0.0)
+        v = _piecewise_cubic_at(self._spline.x, self._spline.c, s.ravel()).reshape(s.shape + (4,))
         if v.ndim == 1:
             return IrregularityValues(*(float(x) for x in v))
         return IrregularityValues(*(v[..., j] for j in range(4)))

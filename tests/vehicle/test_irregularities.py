@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import quad
+from scipy.interpolate import PchipInterpolator
 from scipy.signal import welch
 
 from vehicle.irregularities import (
@@ -248,6 +249,23 @@ def test_interpolation_is_smooth_accurate_and_does_not_overshoot():
     assert np.abs(bump(np.linspace(0.0, 40.0, 401)).lateral_m).max() <= 1e-3
 
 
+def test_evaluation_is_scipys_pchip_bit_for_bit():
+    """The compiled evaluation (vehicle.irregularities._piecewise_cubic_at) is scipy's
+    PchipInterpolator through the same samples, bit for bit, inside the range (breakpoints and
+    both ends included), and 0 outside it and at NaN; any shape of s."""
+    rng = np.random.default_rng(7)
+    s = np.cumsum(rng.uniform(0.1, 0.5, 400))
+    values = [rng.normal(0.0, 1e-3, s.size) for _ in range(4)]
+    t = TrackIrregularity(s, *values)
+    points = np.concatenate([rng.uniform(s[0] - 5.0, s[-1] + 5.0, 5000), s, [np.nan, -np.inf, np.inf]])
+    inside = (points >= s[0]) & (points <= s[-1])
+    for column, got in zip(values, t(points)):
+        reference = PchipInterpolator(s, column)(np.where(inside, points, s[0]))
+        np.testing.assert_array_equal(got, np.where(inside, reference, 0.0))
+    grid = points[:12].reshape(3, 4)
+    np.testing.assert_array_equal(np.array(t(grid)), np.array(t(grid.ravel())).reshape(4, 3, 4))
+
+
 def test_rail_offsets_signs_and_inverse():
     t = simple()
     y_l, z_l, y_r, z_r = t.rail_offsets(10.0)
@@ -347,3 +365,31 @@ def test_unit_limit_can_be_raised(tmp_path):
     with pytest.raises(ValueError, match="exceeds"):
         TrackIrregularity.from_file(path)
     assert TrackIrregularity.from_file(path, max_abs_m=0.2)(100.0).lateral_m == pytest.approx(0.14)
+
+
+@pytest.mark.parametrize("irregularity, ok", [
+    (lambda s: (s * 0.0, s * 1e-3, s * 0.0, s * 0.0), True),
+    (lambda s: (0.0, s * 1e-3, 0.0, np.zeros(s.shape[-1])), True),          # channels that broadcast to s
+    (lambda s: (x for x in (s * 0.0, s * 0.0, s * 0.0, s * 0.0)), True),    # any iterable of four
+    (lambda s: (s * 0.0, s * np.nan, s * 0.0, s * 0.0), False),             # not finite
+    (lambda s: (s * 0.0, s * 0.0, s * 0.0), False),                        # three channels
+    (lambda s: (s * 0.0, s * 0.0, s * 0.0, np.zeros(7)), False),            # a shape that is not s's
+])
+def test_the_car_reads_an_irregularity_function_as_its_contract_says(irregularity, ok):
+    """MetroCar's per-step reading of ``irregularity(s)`` (vehicle.car.hooks): four arrays shaped
+    like s (or broadcasting to it), finite; anything else a ValueError saying what is expected."""
+    from types import SimpleNamespace
+
+    from vehicle.car.hooks import StepHooks
+    s0 = np.array([1.0, 3.0, 10.0, 12.0])
+    car = SimpleNamespace(_irr=irregularity, _wheelset_s_m=lambda t: s0 + 20.0 * np.asarray(t))
+    times = np.array([[0.1], [0.2], [0.3]])
+    if not ok:
+        with pytest.raises(ValueError, match="4 finite arrays"):
+            StepHooks._irregularity_at(car, times)
+        return
+    values = StepHooks._irregularity_at(car, times)
+    assert len(values) == 4 and all(v.shape == (3, 4) for v in values)
+    expected = irregularity(s0 + 20.0 * times)
+    for got, want in zip(values, expected if not hasattr(expected, "__next__") else [0.0] * 4):
+        np.testing.assert_array_equal(got, np.broadcast_to(want, (3, 4)))

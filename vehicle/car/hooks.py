@@ -13,6 +13,23 @@ from ..suspension import maxwell_step
 _OUT = exu.OutputVariableType
 
 
+def _four_channels(values: tuple, shape: tuple) -> np.ndarray | None:
+    """``values`` as one (4, *shape) array (four arrays shaped like s, or broadcasting to it), or
+    None when they are not four or do not broadcast."""
+    try:  # the usual case, four arrays shaped like s: one conversion
+        v = np.array(values, dtype=float)
+        if v.shape == (4,) + shape:
+            return v
+    except ValueError:  # shapes that differ (e.g. a scalar 0 for a channel)
+        pass
+    if len(values) != 4:
+        return None
+    try:
+        return np.array([np.broadcast_to(np.asarray(x, dtype=float), shape) for x in values])
+    except ValueError:
+        return None
+
+
 class StepHooks:
     """Per-step user functions and the track they read."""
 
@@ -74,12 +91,11 @@ class StepHooks:
         """(lateral, vertical, cross_level, gauge), each shaped like s = s0 + v t: (4,) under the
         wheelsets at a time t, (n, 4) for times of shape (n, 1)."""
         s = self._wheelset_s_m(t)
-        out = tuple(np.broadcast_to(np.asarray(v, dtype=float), s.shape).astype(float)
-                    for v in self._irr(s))
-        if len(out) != 4 or not all(np.all(np.isfinite(v)) for v in out):
+        v = _four_channels(tuple(self._irr(s)), s.shape)
+        if v is None or not np.isfinite(v).all():
             raise ValueError("irregularity(s) must return 4 finite arrays (lateral_m, "
                              "vertical_m, cross_level_m, gauge_m) shaped like s")
-        return out
+        return tuple(v)
 
     def _set_contact_track(self, t: float, state=None) -> None:
         """Track frames and rail offsets, with their rates, at the step end t (contact guidance).

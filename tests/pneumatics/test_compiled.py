@@ -1,0 +1,96 @@
+"""The circuit's compiled laws (:mod:`pneumatics.compiled`) against the numpy expressions of the
+same equations, written out here: equal bit for bit, over random states that cover every branch
+(choked, subsonic, the laminar band, either flow direction, table ends, dead bands), NaN included.
+
+Bit for bit, not to a tolerance: the compiled law is the same sequence of correctly rounded IEEE
+operations, so any difference would be a different formula (and a co-simulation that should be
+unchanged by compilation would then drift from its published results)."""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from pneumatics.gas import AIR, T_REF_K
+from pneumatics.orifice import LAMINAR_RATIO, iso6358_mass_flow_kg_per_s, orifice_flow_kg_per_s
+from pneumatics.pipe import pipe_flow_rate_kg_per_s2
+from pneumatics.valves import differential_valve_flow_kg_per_s, lever_conductance
+
+RNG = np.random.default_rng(20)
+N = 20000
+
+
+def iso6358_numpy(C, b, p_up, T_up, p_down):
+    """Eqs (6)-(7) as numpy operations (the law before it was compiled)."""
+    ratio = np.minimum(p_down / p_up, 1.0)
+    choked = C * p_up * AIR.rho_ref_kg_per_m3 * np.sqrt(T_REF_K / T_up)
+    r_lam = 1.0 - LAMINAR_RATIO
+    factor = np.sqrt(np.maximum(1.0 - ((np.maximum(np.minimum(ratio, r_lam), b) - b) / (1.0 - b)) ** 2, 0.0))
+    factor = np.where(ratio > r_lam, factor * (1.0 - ratio) / LAMINAR_RATIO, factor)
+    return choked * factor
+
+
+def pressures():
+    """(p_a, p_b): far apart, close (the laminar band, 1e-3 relative), equal, and NaN."""
+    p_a = RNG.uniform(1e5, 1e6, N)
+    close = p_a * (1.0 + RNG.uniform(-2e-3, 2e-3, N))
+    far = RNG.uniform(1e5, 1e6, N)
+    p_b = np.where(np.arange(N) % 3 == 0, close, far)
+    p_b[::97] = p_a[::97]
+    p_a[5], p_b[7] = np.nan, np.nan
+    return p_a, p_b
+
+
+def test_orifice_flow_is_the_numpy_law_bit_for_bit():
+    p_a, p_b = pressures()
+    T_a, T_b = RNG.uniform(250.0, 350.0, N), RNG.uniform(250.0, 350.0, N)
+    C, b = RNG.uniform(0.0, 2e-8, N), RNG.uniform(0.1, 0.6, N)
+    forward = p_a >= p_b
+    with warnings.catch_warnings(), np.errstate(invalid="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)   # the NaN entries
+        q = iso6358_numpy(C, b, np.where(forward, p_a, p_b), np.where(forward, T_a, T_b), np.where(forward, p_b, p_a))
+        expected = np.where(forward, q, -q)
+        got = orifice_flow_kg_per_s(C, b, p_a, T_a, p_b, T_b)
+        up, down = np.maximum(p_a, p_b), np.minimum(p_a, p_b)
+        got_iso = iso6358_mass_flow_kg_per_s(C, b, up, T_a, down)
+        expected_iso = iso6358_numpy(C, b, up, T_a, down)
+    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(got_iso, expected_iso)
+    assert np.isnan(got[5]) and np.isnan(got[7])
+    # broadcasting as the circuit calls it: (orifices, cases) against (orifices, 1)
+    shaped = orifice_flow_kg_per_s(C[:12].reshape(6, 2), b[:6].reshape(6, 1), p_a[:12].reshape(6, 2),
+                                   T_a[:12].reshape(6, 2), p_b[:12].reshape(6, 2), T_b[:12].reshape(6, 2))
+    np.testing.assert_array_equal(shaped, orifice_flow_kg_per_s(
+        C[:12], np.repeat(b[:6], 2), p_a[:12], T_a[:12], p_b[:12], T_b[:12]).reshape(6, 2))
+
+
+def test_lever_conductance_and_differential_valve_are_the_numpy_laws_bit_for_bit():
+    table_lever = np.array([0.0, 0.005, 0.0051, 0.02, 0.05])        # dead band, then rising, then held
+    table_C = np.array([0.0, 0.0, 1e-9, 2.3e-8, 2.3e-8])
+    lever = np.concatenate([RNG.normal(0.0, 0.03, N), table_lever, -table_lever, [np.nan]]).reshape(-1, 1)
+    expected = np.interp(np.maximum(lever, 0.0), table_lever, table_C) * (lever > 0.0)
+    np.testing.assert_array_equal(lever_conductance(lever, table_lever, table_C), expected)
+    p_a, p_b = RNG.uniform(1e5, 9e5, (N, 2)), RNG.uniform(1e5, 9e5, (N, 2))
+    table_dp, table_q = np.array([0.0, 1.5e5, 2.5e5]), np.array([0.0, 0.0, 0.02])
+    dp = p_a - p_b
+    np.testing.assert_array_equal(differential_valve_flow_kg_per_s(p_a, p_b, table_dp, table_q),
+                                  np.sign(dp) * np.interp(np.abs(dp), table_dp, table_q))
+
+
+def test_pipe_flow_rate_is_the_numpy_law_bit_for_bit():
+    q = RNG.normal(0.0, 0.05, (N, 2))
+    p_a, p_b = RNG.uniform(1e5, 9e5, (N, 2)), RNG.uniform(1e5, 9e5, (N, 2))
+    rho = RNG.uniform(1.0, 10.0, (N, 2))
+    L, A, K = np.full((N, 1), 1.3), np.full((N, 1), 2.5e-4), np.full((N, 1), 1.11)
+    expected = A / L * ((p_a - p_b) - K * q * np.abs(q) / (2.0 * rho * A ** 2))
+    np.testing.assert_array_equal(pipe_flow_rate_kg_per_s2(q, p_a, p_b, rho, L, A, K), expected)
+
+
+@pytest.mark.parametrize("law, args", [
+    (orifice_flow_kg_per_s, (1e-8, 0.3, 3e5, 300.0, 2e5, 290.0)),
+    (pipe_flow_rate_kg_per_s2, (0.01, 3e5, 2e5, 3.0, 1.0, 2.5e-4, 1.11)),
+])
+def test_the_compiled_laws_take_floats(law, args):
+    """Scalars in, a float out, as the numpy expressions did."""
+    assert np.ndim(law(*args)) == 0 and np.isfinite(law(*args))
