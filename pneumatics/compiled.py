@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from typing import Callable
 
-
 _HELPERS: list = []
 
 
@@ -34,10 +33,10 @@ def _numba():
 
 
 class _Lazy:
-    """``compile(fn)`` on the first call, then the compiled function (see the module doc)."""
+    """``compiler(fn)`` on the first call, then the compiled function (see the module doc)."""
 
-    def __init__(self, fn: Callable, compile: Callable[[Callable], Callable]):
-        self.py_func, self._compile, self._call = fn, compile, None
+    def __init__(self, fn: Callable, compiler: Callable[[Callable], Callable]):
+        self.py_func, self._compile, self._call = fn, compiler, None
         self.__doc__, self.__name__, self.__wrapped__ = fn.__doc__, fn.__name__, fn
 
     def __call__(self, *args):

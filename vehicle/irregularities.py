@@ -2,8 +2,9 @@
 as functions of the distance s along the track, read from a CSV file or generated from a
 one-sided power spectral density (ERRI B176 low/high level, FRA classes 1-6) with a seed.
 
-Pure numpy/scipy (the evaluation compiled by numba where available); no exudyn, no ``pneumatics``/``cosim`` imports. Nothing here is switched on by
-itself: a model that wants irregularities builds a :class:`TrackIrregularity` and evaluates it.
+Pure numpy/scipy (the evaluation compiled by numba where available); no exudyn, no
+``pneumatics``/``cosim`` imports. Nothing here is switched on by itself: a model that wants
+irregularities builds a :class:`TrackIrregularity` and evaluates it.
 User documentation with the formulas, coefficients and their sources: ``docs/track_irregularities.md``.
 
 Quantities and signs (all in metres, s in metres along the running direction; track frame x
