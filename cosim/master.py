@@ -236,8 +236,8 @@ class CoSimulation:
         self.watch = watch
         self._watch_every = max(1, round(StateWatch.INTERVAL_S / macro_step_s))
         self._steps = 0
-        #: the circuit's evaluation at the current (x, z) when a sample has computed it (the
-        #: next macro-step's force laws start from the same state), else None
+        #: (x, z, circuit, evaluation) of the last sample (the next macro-step's force laws start
+        #: from the same state: :meth:`_evaluation_now`), None after a step
         self._sampled = None
         #: [(time, circuit from then on)] of the faults still to happen, by time
         times = sorted({f.t_s for f in circuit.faults})
@@ -304,6 +304,15 @@ class CoSimulation:
         self.x, self.t, self.z, self.zd = x1, t1, z1, zd1
         self._sampled = None
 
+    def _evaluation_now(self):
+        """The circuit's evaluation that :meth:`sample` computed, if it is of the current state
+        and circuit (the very objects: a caller that replaced x, z or the circuit since gets a
+        fresh evaluation), else None."""
+        if self._sampled is None:
+            return None
+        x, z, circuit, evaluated = self._sampled
+        return evaluated if (x is self.x and z is self.z and circuit is self.circuit) else None
+
     def _force_laws(self):
         """The bellow force laws of this step (see the module docstring), each (4, cases):
         (F_s, K_n, (F_e - F_s) / H), and the circuit's rate d(state)/dt at (x_n, z_n, zd_n).
@@ -316,7 +325,7 @@ class CoSimulation:
         if self.coupling != "linearised":
             zero = np.zeros_like(F_now)
             return F_now, zero, zero, c.derivatives(self.x, self.z, self.zd)
-        rate, held_rate = c.derivatives_and_held(self.x, self.z, self.zd, self._sampled)
+        rate, held_rate = c.derivatives_and_held(self.x, self.z, self.zd, self._evaluation_now())
         half = 0.5 * self.H
         dF_dt = (c.bellow_forces_N(self.x + half * held_rate, self.z) - F_now) / half
         K = c.bellow_stiffness_N_per_m(self.x, self.z)
@@ -367,8 +376,9 @@ class CoSimulation:
         """Append the current state's :data:`OUTPUTS` to ``record`` (NaN for a stopped case; the
         contact outputs only when the cars run on the wheel-rail contact)."""
         c = self.circuit
-        self._sampled = c.evaluate(self.x, self.z)     # the next macro-step starts from it
-        now = Sample(self, c.outputs(self.x, self.z, self._sampled), c.valve_air_kg(self.x), c.valve_open_time_s(self.x))
+        evaluated = c.evaluate(self.x, self.z)
+        self._sampled = (self.x, self.z, c, evaluated)  # the next macro-step starts from this state
+        now = Sample(self, c.outputs(self.x, self.z, evaluated), c.valve_air_kg(self.x), c.valve_open_time_s(self.x))
         stopped = ~self.active
         any_stopped = bool(stopped.any())
         record.t_s.append(self.t)

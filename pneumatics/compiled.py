@@ -18,42 +18,73 @@ code in milliseconds). With ``NUMBA_DISABLE_JIT=1`` ``arrays`` and ``scalar`` ru
 """
 from __future__ import annotations
 
+import hashlib
+import threading
+import warnings
+from pathlib import Path
 from typing import Callable
 
+#: the sources whose constants and helpers the compiled laws use: numba checks a cached law
+#: against its own file only, so the laws' cache names carry a digest of all of them (a changed
+#: constant, e.g. gas.T_REF_K, compiles afresh instead of running stale machine code)
+SOURCES = ("compiled.py", "gas.py", "orifice.py", "pipe.py", "valves.py")
+_HERE = Path(__file__).resolve().parent
 _HELPERS: list = []
+_LOCK = threading.Lock()
 
 
-def _numba():
-    """numba, with the :func:`scalar` helpers registered (once per process)."""
-    import numba
-    from numba.extending import register_jitable
-    while _HELPERS:
-        register_jitable(_HELPERS.pop())
-    return numba
+def _digest() -> str:
+    digest = hashlib.sha256()
+    for name in SOURCES:
+        digest.update((_HERE / name).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+_DIGEST = _digest()  # the sources as imported: what numba will compile
+
+
+def _compiled(fn: Callable, make: Callable) -> Callable:
+    """``make(numba, cache)(fn)`` with the helpers registered: cached on disk under a name that
+    carries the sources' digest; without the cache (a warning) where it cannot be written, or
+    when a source changed since it was imported."""
+    with _LOCK:
+        import numba
+        from numba.extending import register_jitable
+        while _HELPERS:
+            register_jitable(_HELPERS.pop())
+        if _digest() != _DIGEST:
+            return make(numba, False)(fn)
+        fn.__qualname__ = f"{fn.__name__}_{_DIGEST}"
+        try:
+            return make(numba, True)(fn)
+        except RuntimeError as exc:  # no writable cache folder anywhere
+            warnings.warn(f"the circuit's compiled laws cannot be cached ({exc}); they compile in every "
+                          f"process (a second or two)", RuntimeWarning, stacklevel=4)
+            return make(numba, False)(fn)
 
 
 class _Lazy:
-    """``compiler(fn)`` on the first call, then the compiled function (see the module doc)."""
+    """The law compiled on its first call (:func:`_compiled`), then called directly."""
 
-    def __init__(self, fn: Callable, compiler: Callable[[Callable], Callable]):
-        self.py_func, self._compile, self._call = fn, compiler, None
+    def __init__(self, fn: Callable, make: Callable):
+        self.py_func, self._make, self._call = fn, make, None
         self.__doc__, self.__name__, self.__wrapped__ = fn.__doc__, fn.__name__, fn
 
-    def __call__(self, *args):
+    def __call__(self, *args, **kwargs):
         if self._call is None:
-            self._call = self._compile(self.py_func)
-        return self._call(*args)
+            self._call = _compiled(self.py_func, self._make)
+        return self._call(*args, **kwargs)
 
 
 def elementwise(n_args: int) -> Callable[[Callable], Callable]:
     """Decorator: a scalar law of ``n_args`` floats as a ufunc over arrays and scalars (float64)."""
     signature = f"float64({', '.join(['float64'] * n_args)})"
-    return lambda fn: _Lazy(fn, lambda f: _numba().vectorize([signature], cache=True)(f))
+    return lambda fn: _Lazy(fn, lambda numba, cache: numba.vectorize([signature], cache=cache))
 
 
 def arrays(fn: Callable) -> Callable:
     """A function of arrays, compiled (numba ``njit``, cached) on its first call."""
-    return _Lazy(fn, lambda f: _numba().njit(cache=True)(f))
+    return _Lazy(fn, lambda numba, cache: numba.njit(cache=cache))
 
 
 def scalar(fn: Callable) -> Callable:

@@ -204,6 +204,44 @@ def test_a_diverging_case_stops_alone_and_keeps_its_record(tmp_path):
     assert diagnosis.startswith("k = 10: multibody solver failed advancing from t = 0.095 to 0.1 s")
 
 
+class _PumpingCar(_StandingCar):
+    """A stand-in whose bellows are crushed by 3 mm sines (different per bellow): the air flows."""
+
+    def bellow_crushing(self):
+        w = 2 * np.pi * np.array([1.0, 1.3, 0.7, 2.1])
+        return 3e-3 * np.sin(w * self.t), 3e-3 * w * np.cos(w * self.t)
+
+
+def _pumping_run(tmp_path, reuse: bool):
+    from cosim.master import CoSimulation
+    from pneumatics.circuit import Circuit
+    from pneumatics.layouts import static_pressures
+    comps = scenario(tmp_path).circuit.components()
+    circuit = Circuit(comps, k_W_per_K=np.array([0.0, 10.0]))
+    x0 = circuit.initial_state(static_pressures(comps, np.full(4, 40e3), circuit.atmosphere.p_Pa), n_cases=2)
+    cosim = CoSimulation([_PumpingCar(), _PumpingCar()], circuit, x0, 0.005, 0.005)
+    if not reuse:
+        cosim._evaluation_now = lambda: None
+    record, diagnosis = cosim.run(0.5, 0.005)       # a sample after every macro-step
+    assert diagnosis is None
+    return cosim, record.arrays()
+
+
+def test_the_next_step_reuses_the_sampled_evaluation_with_the_same_numbers(tmp_path):
+    """CoSimulation.sample evaluates the circuit at the state the next macro-step starts from; the
+    step takes that evaluation instead of computing it again: the record is the same, bit for
+    bit, as without the reuse. An evaluation of a state that has been replaced is not used."""
+    cosim, reused = _pumping_run(tmp_path, reuse=True)
+    _, fresh = _pumping_run(tmp_path, reuse=False)
+    assert reused.keys() == fresh.keys()
+    for name in reused:
+        np.testing.assert_array_equal(reused[name], fresh[name], err_msg=name)
+    assert np.ptp(reused["bellow_p_Pa"]) > 1e3                      # the air did something
+    assert cosim._evaluation_now() is not None
+    cosim.x = cosim.x.copy()                                         # a caller replaced the state
+    assert cosim._evaluation_now() is None
+
+
 # ----------------------------------------------------------------------------- EN 14363 geometry
 def test_en14363_rail_heights_give_both_twists(tmp_path):
     s = en_scenario(tmp_path)
