@@ -3,7 +3,7 @@ gathered into one labelled Dataset (:mod:`cosim.results.series`)."""
 from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import xarray as xr
@@ -84,15 +84,17 @@ def _worker_shares(k_lists: Sequence[Sequence[float]], jobs: int) -> List[List[T
     return shares
 
 
-def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, duration_s: float,
+def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, duration_s: Union[float, Sequence[float]],
                       labels: Optional[Sequence[Optional[str]]] = None) -> List[Tuple[List[Tuple[int, list]], List[str]]]:
     """Run every k of every variant (e.g. the valve settings of one scenario) on one pool of
     ``solver.jobs`` processes (the first variant's), the cases shared out by
     :func:`_worker_shares`; returns, per variant, its chunks' record arrays with their k values,
-    and the divergence diagnoses. ``labels``: per variant, a progress label (None: silent)."""
+    and the divergence diagnoses. ``duration_s``: one for all, or one per variant; ``labels``: per
+    variant, a progress label (None: silent)."""
     labels = list(labels or [None] * len(variants))
+    durations = [float(duration_s)] * len(variants) if np.ndim(duration_s) == 0 else list(duration_s)
     shares = _worker_shares([v.k_W_per_K for v in variants], variants[0].solver.jobs)
-    tasks = [[(variants[v], ks, make_car, duration_s, labels[v]) for v, ks in share] for share in shares]
+    tasks = [[(variants[v], ks, make_car, durations[v], labels[v]) for v, ks in share] for share in shares]
     if len(tasks) == 1:
         done = [_run_chunks(tasks[0])]
     else:
@@ -113,20 +115,46 @@ def simulate_cases(scenario: Scenario, settings: Sequence[Optional[bool]], make_
     one pool of ``solver.jobs`` processes: one labelled Dataset (:func:`cosim.results.series.car_dataset`;
     cases valve setting by valve setting, k ascending within each) and the divergence diagnoses
     (prefixed with the valve setting when there are several)."""
+    return simulate_scenarios([scenario], settings, make_car, [duration_s], progress)[0]
+
+
+def simulate_scenarios(scenarios: Sequence[Scenario], settings: Sequence[Optional[bool]], make_car: CarFactory,
+                       durations_s: Sequence[float], progress: Optional[Progress] = None,
+                       names: Optional[Sequence[str]] = None) -> List[Tuple[xr.Dataset, List[str]]]:
+    """:func:`simulate_cases` for several scenarios at once (e.g. a ride's speeds, each on its own
+    track, each run for its own duration), all on one pool of ``solver.jobs`` processes (the first
+    scenario's): per scenario its Dataset and diagnoses. The cases are shared out scenario by
+    scenario (:func:`_worker_shares`), so that two scenarios of 4 k values on 2 processes run one
+    scenario per process, its 4 cars on one batched circuit: the circuit's cost per macro-step is
+    paid once for 4 cases instead of 2 (a case's numbers do not depend on the cases it shares a
+    circuit with). ``names``: the progress labels of the scenarios (default: their names)."""
     named = any(s is not None for s in settings)
-    variants = [scenario if valves is None else scenario.with_valves(valves) for valves in settings]
     show = progress is not None and not progress.quiet
-    labels = [(scenario.name + (f" valves {'on' if v.circuit.valves else 'off'}" if named else "")) if show else None
-              for v in variants]
-    datasets, diagnoses = [], []
-    for variant, (chunks, diag) in zip(variants, simulate_variants(variants, make_car, duration_s, labels)):
-        circuit = variant.circuit.compile()
-        valves = variant.circuit.valves
-        parts = [car_dataset(arrays, ks, valves, named, circuit.link_names, circuit.valve_names) for ks, arrays in chunks]
-        ds = concat_cases(parts)
-        datasets.append(ds.isel(case=np.argsort(ds["k_W_per_K"].values, kind="stable")))  # inf sorts last
-        diagnoses += [f"valves {'on' if valves else 'off'}: {d}" if named else d for d in diag]
-    return concat_cases(datasets), diagnoses
+    variants, owners, labels = [], [], []
+    for i, scenario in enumerate(scenarios):
+        for valves in settings:
+            variant = scenario if valves is None else scenario.with_valves(valves)
+            variants.append(variant)
+            owners.append(i)
+            name = names[i] if names else scenario.name
+            labels.append((name + (f" valves {'on' if variant.circuit.valves else 'off'}" if named else ""))
+                          if show else None)
+    results = simulate_variants(variants, make_car, [durations_s[i] for i in owners], labels)
+    out = []
+    for i in range(len(scenarios)):
+        datasets, diagnoses = [], []
+        for variant, owner, (chunks, diag) in zip(variants, owners, results):
+            if owner != i:
+                continue
+            circuit = variant.circuit.compile()
+            valves = variant.circuit.valves
+            parts = [car_dataset(arrays, ks, valves, named, circuit.link_names, circuit.valve_names)
+                     for ks, arrays in chunks]
+            ds = concat_cases(parts)
+            datasets.append(ds.isel(case=np.argsort(ds["k_W_per_K"].values, kind="stable")))  # inf sorts last
+            diagnoses += [f"valves {'on' if valves else 'off'}: {d}" if named else d for d in diag]
+        out.append((concat_cases(datasets), diagnoses))
+    return out
 
 
 def add_wheel_unloading(ds: xr.Dataset, column: Optional[str] = None) -> None:

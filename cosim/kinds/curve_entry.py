@@ -26,7 +26,7 @@ from cosim.kinds.car import (
     fault_figure,
     of_setting,
     per_case,
-    simulate_cases,
+    simulate_scenarios,
 )
 from cosim.kinds.comfort import comfort_columns
 from cosim.limits.assessment import STEP_M
@@ -446,8 +446,25 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
     """Every case (k value x valve setting) of the curve entry: the labelled time series (see
     :mod:`cosim.results.series`) with the track plane's roll, the carbody roll relative to it, and the
     flows through the valves added, and the divergence diagnoses."""
+    return simulate_many([scenario], progress)[0]
+
+
+def simulate_many(scenarios: Sequence[Scenario], progress: Optional[Progress] = None,
+                  names: Optional[Sequence[str]] = None) -> List[Tuple[xr.Dataset, List[str]]]:
+    """:func:`simulate` for several curve entries at once (e.g. a ride's speeds), on one pool of
+    processes (:func:`cosim.kinds.car.simulate_scenarios`: a scenario's k values share a process
+    and a circuit where the processes allow). All must have the same valve settings."""
+    settings = scenarios[0].curve.valve_settings
+    if any(s.curve.valve_settings != settings for s in scenarios):
+        raise ValueError("simulate_many: the scenarios' valve settings differ")
+    results = simulate_scenarios(scenarios, settings, make_car, [s.curve.duration_s for s in scenarios], progress, names)
+    return [(_with_track_series(scenario, ds), diagnoses) for scenario, (ds, diagnoses) in zip(scenarios, results)]
+
+
+def _with_track_series(scenario: Scenario, ds: xr.Dataset) -> xr.Dataset:
+    """The run's time series with the track plane's roll, the carbody roll relative to it, the
+    wheel-rail series and the flows through the valves added."""
     curve = scenario.curve
-    ds, diagnoses = simulate_cases(scenario, curve.valve_settings, make_car, curve.duration_s, progress)
     plane = track_roll_rad(scenario, ds["time"].values)
     ds["roll_track_plane_rad"] = with_column(xr.DataArray(plane, dims="time"), "roll_track_plane_rad", "rad",
                                              "roll of the track plane under the car (mean of the bogie centres)")
@@ -459,7 +476,7 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
         ds["valve_flow_kg_per_s"] = with_column(ds["link_flow_kg_per_s"].sel(link=valves).rename(link="valve_link"),
                                                 "q_{}_kg_per_s", "kg/s", "mass flow through each valve, a -> b",
                                                 sparse=True)
-    return ds, diagnoses
+    return ds
 
 
 def run(scenario: Scenario, progress: Progress) -> Outcome:

@@ -6,7 +6,9 @@ power spectra. Kind ``ride``, section ``ride`` (:class:`RideTest`).
 
 Each speed is a run along a track built for it (:func:`curve_at`): the car starts at rest on design
 track, the irregularity fades in ahead of it, the record starts ``settle_s`` later (in a curve:
-once the whole car is in the arc as well) and lasts ``record_s``."""
+once the whole car is in the arc as well) and lasts ``record_s``. The speeds run on one pool of
+``solver.jobs`` processes, a speed's k values on one circuit where the processes allow
+(:func:`cosim.kinds.curve_entry.simulate_many`)."""
 from __future__ import annotations
 
 import dataclasses
@@ -156,9 +158,11 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
              f"{'straight track' if ride.radius_m is None else f'R = {ride.radius_m:g} m'}, {ride.record_s:g} s "
              f"records; {len(scenario.k_W_per_K)} k values x valves {ride.valve_settings}")
     rows, series, diagnoses, cases = [], {}, [], []
-    for v in ride.speeds_m_per_s:
-        curve, start = curve_at(ride, v, scenario.vehicle)
-        ds, found = curve_entry.simulate(_speed_scenario(scenario, curve), progress)
+    runs = [curve_at(ride, v, scenario.vehicle) for v in ride.speeds_m_per_s]
+    # all speeds on one pool: a speed's k values share a process and a circuit where the processes allow
+    results = curve_entry.simulate_many([_speed_scenario(scenario, curve) for curve, _ in runs], progress,
+                                        [f"{scenario.name} {v:g} m/s" for v in ride.speeds_m_per_s])
+    for v, (curve, start), (ds, found) in zip(ride.speeds_m_per_s, runs, results):
         diagnoses += [f"{v:g} m/s: {d}" for d in found]
         series[f"ride_v={v:g}"] = ds
         for j in range(ds.sizes["case"]):

@@ -207,6 +207,14 @@ def test_a_diverging_case_stops_alone_and_keeps_its_record(tmp_path):
 class _PumpingCar(_StandingCar):
     """A stand-in whose bellows are crushed by 3 mm sines (different per bellow): the air flows."""
 
+    bellow_height_m = 0.25
+
+    def roll_to_track_rad(self):
+        return np.zeros(3)
+
+    def airspring_crushing_m(self):
+        return self.bellow_crushing()[0]
+
     def bellow_crushing(self):
         w = 2 * np.pi * np.array([1.0, 1.3, 0.7, 2.1])
         return 3e-3 * np.sin(w * self.t), 3e-3 * w * np.cos(w * self.t)
@@ -240,6 +248,30 @@ def test_the_next_step_reuses_the_sampled_evaluation_with_the_same_numbers(tmp_p
     assert cosim._evaluation_now() is not None
     cosim.x = cosim.x.copy()                                         # a caller replaced the state
     assert cosim._evaluation_now() is None
+
+
+def _pumping_car(_scenario):
+    return _PumpingCar()
+
+
+def test_scenarios_run_together_give_what_each_gives_alone(tmp_path):
+    """cosim.kinds.car.simulate_scenarios (a ride's speeds on one pool, a scenario's k values on one
+    circuit) gives each scenario the Dataset simulate_cases gives it alone, bit for bit, each run
+    for its own duration, with both valve settings."""
+    import dataclasses
+
+    from cosim.kinds.car import simulate_cases, simulate_scenarios
+    base = scenario(tmp_path)
+    one = dataclasses.replace(base, solver=dataclasses.replace(base.solver, jobs=1), k_W_per_K=(0.0, 10.0))
+    two = dataclasses.replace(one, k_W_per_K=(100.0, float("inf")))
+    together = simulate_scenarios([one, two], (False, True), _pumping_car, [0.2, 0.3])
+    for sc, duration, (ds, diagnoses) in zip((one, two), (0.2, 0.3), together):
+        alone, alone_diagnoses = simulate_cases(sc, (False, True), _pumping_car, duration)
+        assert diagnoses == alone_diagnoses == []
+        assert float(ds["time"][-1]) == pytest.approx(duration)
+        assert list(ds["k_W_per_K"].values) == 2 * list(sc.k_W_per_K)
+        for name in alone.data_vars:
+            np.testing.assert_array_equal(ds[name].values, alone[name].values, err_msg=name)
 
 
 # ----------------------------------------------------------------------------- EN 14363 geometry
