@@ -367,30 +367,33 @@ def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str,
     """Every brute-force run (speed x disturbance x k x valve setting, co-simulated): per run the
     leading wheelset's growth rate and final amplitude (:mod:`cosim.stability.nonlinear`), and the
     diagnoses of runs that stopped (a derailed car: it grew)."""
-    from cosim.kinds.car import simulate_cases
+    from cosim.kinds.car import simulate_scenarios
     from cosim.stability.nonlinear import final_amplitude_m, growth_rate_per_s, hunts
     test = scenario.stability
     out, diagnoses = [], []
-    for d in test.disturbances_m:
-        for v in test.nonlinear_speeds_m_per_s:
-            progress(f"brute force at {v:g} m/s, wheelsets released at {1e3 * d:g} mm, {test.nonlinear_s:g} s")
-            variant = scenario.with_experiment(nonlinear_speeds_m_per_s=(v,), disturbances_m=(d,))
-            ds, found = simulate_cases(variant, test.valve_settings, disturbed_car, test.nonlinear_s, progress)
-            diagnoses += [f"{v:g} m/s, {1e3 * d:g} mm: {f}" for f in found]
-            t = ds["time"].values
-            for j in range(ds.sizes["case"]):
-                case = ds.isel(case=j)
-                y = case["wheelset_lateral_m"].isel(wheelset=0).values
-                ran = np.isfinite(y)                 # a run that stopped holds NaN from then on
-                stopped = not ran.all()
-                rate = growth_rate_per_s(t[ran], y[ran], max_amplitude_m=SMALL_AMPLITUDE_FACTOR * d)
-                if math.isnan(rate) and stopped:
-                    rate = math.inf                   # derailed before it could be measured: it grew
-                amplitude = final_amplitude_m(t[ran], y[ran])
-                out.append({"valves": bool(case["valves"].item()), "k_W_per_K": float(case["k_W_per_K"].item()),
-                            "speed_m_per_s": float(v), "disturbance_m": float(d), "growth_rate_per_s": rate,
-                            "final_amplitude_m": amplitude, "hunts": stopped or hunts(amplitude, d),
-                            "stopped": stopped})
+    runs = [(v, d) for d in test.disturbances_m for v in test.nonlinear_speeds_m_per_s]
+    progress(f"brute force at {', '.join(f'{v:g}' for v in test.nonlinear_speeds_m_per_s)} m/s, wheelsets released "
+             f"at {', '.join(f'{1e3 * d:g}' for d in test.disturbances_m)} mm, {test.nonlinear_s:g} s each")
+    variants = [scenario.with_experiment(nonlinear_speeds_m_per_s=(v,), disturbances_m=(d,)) for v, d in runs]
+    # on one pool: a run's k values share a process and a circuit where the processes allow
+    results = simulate_scenarios(variants, test.valve_settings, disturbed_car, [test.nonlinear_s] * len(runs),
+                                 progress, [f"{scenario.name} {v:g} m/s {1e3 * d:g} mm" for v, d in runs])
+    for (v, d), (ds, found) in zip(runs, results):
+        diagnoses += [f"{v:g} m/s, {1e3 * d:g} mm: {f}" for f in found]
+        t = ds["time"].values
+        for j in range(ds.sizes["case"]):
+            case = ds.isel(case=j)
+            y = case["wheelset_lateral_m"].isel(wheelset=0).values
+            ran = np.isfinite(y)                 # a run that stopped holds NaN from then on
+            stopped = not ran.all()
+            rate = growth_rate_per_s(t[ran], y[ran], max_amplitude_m=SMALL_AMPLITUDE_FACTOR * d)
+            if math.isnan(rate) and stopped:
+                rate = math.inf                   # derailed before it could be measured: it grew
+            amplitude = final_amplitude_m(t[ran], y[ran])
+            out.append({"valves": bool(case["valves"].item()), "k_W_per_K": float(case["k_W_per_K"].item()),
+                        "speed_m_per_s": float(v), "disturbance_m": float(d), "growth_rate_per_s": rate,
+                        "final_amplitude_m": amplitude, "hunts": stopped or hunts(amplitude, d),
+                        "stopped": stopped})
     return out, diagnoses
 
 
@@ -399,17 +402,19 @@ def _ramp_down(scenario: Scenario, progress: Progress):
     amplitude at the start speed and the speed at which it died
     (:func:`cosim.stability.nonlinear.limit_cycle_end`); rows of the envelope against speed (the
     figure's trace); the diagnoses."""
-    from cosim.kinds.car import simulate_cases
+    from cosim.kinds.car import simulate_scenarios
     from cosim.stability.nonlinear import envelope, limit_cycle_end
     from vehicle.speed import SpeedProfile
     test = scenario.stability
     out, traces, diagnoses = [], [], []
-    for a in test.ramp_decelerations_m_per_s2:
-        duration = test.ramp_duration_s(a)
-        progress(f"ramp-down {test.ramp_from_m_per_s:g} -> {test.ramp_to_m_per_s:g} m/s at {a:g} m/s^2 "
-                 f"({duration:g} s)")
-        variant = scenario.with_experiment(ramp_decelerations_m_per_s2=(a,))
-        ds, found = simulate_cases(variant, test.valve_settings, ramping_car, duration, progress)
+    rates = test.ramp_decelerations_m_per_s2
+    durations = [test.ramp_duration_s(a) for a in rates]
+    progress(f"ramp-down {test.ramp_from_m_per_s:g} -> {test.ramp_to_m_per_s:g} m/s at "
+             + ", ".join(f"{a:g} m/s^2 ({duration:g} s)" for a, duration in zip(rates, durations)))
+    variants = [scenario.with_experiment(ramp_decelerations_m_per_s2=(a,)) for a in rates]
+    results = simulate_scenarios(variants, test.valve_settings, ramping_car, durations, progress,
+                                 [f"{scenario.name} ramp {a:g} m/s^2" for a in rates])
+    for a, (ds, found) in zip(rates, results):
         diagnoses += [f"ramp at {a:g} m/s^2: {f}" for f in found]
         profile = SpeedProfile(test.ramp_from_m_per_s, test.ramp_hold_s, a)
         t = ds["time"].values
