@@ -43,7 +43,7 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
 def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]:
     scenario, k_values, make_car, duration_s, label = args
     cosim = build_cosimulation(scenario, k_values, make_car)
-    progress = Progress(f"{label} k={','.join(k_label(k) for k in k_values)}") if label else None
+    progress = Progress(f"{label} k={','.join(k_label(k) for k in sorted(k_values))}") if label else None
     record, diagnosis = cosim.run(duration_s, scenario.solver.output_interval_s, progress)
     return record.arrays(), diagnosis, list(k_values)
 
