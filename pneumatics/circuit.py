@@ -43,7 +43,9 @@ cases (e.g. several k values or frequencies) are integrated as one vectorised sy
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+import operator
 from dataclasses import dataclass
 from typing import Mapping, NamedTuple, Optional, Sequence, Tuple
 
@@ -918,7 +920,10 @@ class Circuit:
         return K.reshape(z.shape)
 
     def total_mass_kg(self, x) -> np.ndarray:
-        return x[self.layout.m].sum(axis=0)
+        """Air in all chambers [kg], per case: added chamber by chamber, in order (numpy's sum
+        orders one column differently from several: the last bit would depend on how many cases
+        a circuit batches)."""
+        return functools.reduce(operator.add, x[self.layout.m])
 
     def mass_from(self, x, node: str) -> np.ndarray:
         """Cumulative mass that left boundary node ``node`` into the circuit (negative: received)

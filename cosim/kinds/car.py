@@ -17,6 +17,7 @@ from cosim.results.plots import Curve, Figure, Panel, k_legend
 from cosim.results.series import car_dataset, concat_cases
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import k_label
+from pneumatics.integrate import stable_step_s
 from pneumatics.layouts import static_pressures
 from pneumatics.valves import DifferentialPressureValve
 from vehicle.params import BELLOWS
@@ -26,17 +27,26 @@ CarFactory = Callable[[Scenario], object]
 
 
 def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: CarFactory) -> CoSimulation:
-    """Cars (one per k) in static equilibrium and the circuit with bellow pressures that carry them."""
+    """Cars (one per k) in static equilibrium and the circuit with bellow pressures that carry them.
+
+    The pneumatic step is the one of all the scenario's k values (and ``k_values``), not only of
+    those this circuit batches (:func:`pneumatics.integrate.stable_step_s` shortens it for a large
+    finite k, ~1e4 W/K and above at 5 ms, and a batched circuit takes one step for all its cases):
+    so a case's numbers do not depend on which cases share its circuit, i.e. on ``solver.jobs`` and
+    on how the runs are grouped onto processes."""
     settings = scenario.solver
     cars = [make_car(scenario) for _ in k_values]
     components = scenario.circuit.components()
     circuit = scenario.circuit.compile(np.asarray(k_values, dtype=float))
     if tuple(circuit.bellow_names) != BELLOWS:
         raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
-    x0 = circuit.initial_state(static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa),
-                               n_cases=len(k_values))
+    p0 = static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa)
+    x0 = circuit.initial_state(p0, n_cases=len(k_values))
+    every_k = sorted(set(scenario.k_W_per_K) | set(k_values))
+    every = scenario.circuit.compile(np.asarray(every_k, dtype=float))
+    h_pneumatic = stable_step_s(every, every.initial_state(p0, n_cases=len(every_k)), settings.pneumatic_step_s)
     watch = StateWatch(scenario.state_limits, len(k_values), cars[0].bellow_height_m)
-    return CoSimulation(cars, circuit, x0, settings.macro_step_s, settings.pneumatic_step_s, settings.coupling,
+    return CoSimulation(cars, circuit, x0, settings.macro_step_s, h_pneumatic, settings.coupling,
                         case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch)
 
 
@@ -127,7 +137,8 @@ def simulate_scenarios(scenarios: Sequence[Scenario], settings: Sequence[Optiona
     scenario (:func:`_worker_shares`), so that two scenarios of 4 k values on 2 processes run one
     scenario per process, its 4 cars on one batched circuit: the circuit's cost per macro-step is
     paid once for 4 cases instead of 2 (a case's numbers do not depend on the cases it shares a
-    circuit with). ``names``: the progress labels of the scenarios (default: their names)."""
+    circuit with: :func:`build_cosimulation`). ``names``: the progress labels of the
+    scenarios (default: their names)."""
     named = any(s is not None for s in settings)
     show = progress is not None and not progress.quiet
     variants, owners, labels = [], [], []

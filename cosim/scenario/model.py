@@ -38,7 +38,10 @@ class SolverSettings:
     [0, 1]: how much it damps what its step cannot resolve (1: nothing; 0: the most; the
     integrator stays second order for every rho). The wheelsets' modes on their contacts lie at
     ~250 Hz, far beyond a 5 ms step; see docs/models.md, "Numerical damping", for how the
-    default was chosen."""
+    default was chosen. ``pneumatic_step_s``: the largest RK4 step of the air; shortened for a
+    large finite k (its thermal rate, :func:`pneumatics.integrate.stable_step_s`; ~1e4 W/K and
+    above at 5 ms), the same for every k of a run, so that ``jobs`` (how the k values are shared
+    out over processes) does not change a number."""
 
     macro_step_s: float = 0.005
     mechanics_step_s: float = 0.005
