@@ -3,7 +3,7 @@ gathered into one labelled Dataset (:mod:`cosim.results.series`)."""
 from __future__ import annotations
 
 from concurrent.futures import ProcessPoolExecutor
-from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import xarray as xr
@@ -94,17 +94,15 @@ def _worker_shares(k_lists: Sequence[Sequence[float]], jobs: int) -> List[List[T
     return shares
 
 
-def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, duration_s: Union[float, Sequence[float]],
+def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, durations_s: Sequence[float],
                       labels: Optional[Sequence[Optional[str]]] = None) -> List[Tuple[List[Tuple[int, list]], List[str]]]:
-    """Run every k of every variant (e.g. the valve settings of one scenario) on one pool of
-    ``solver.jobs`` processes (the first variant's), the cases shared out by
-    :func:`_worker_shares`; returns, per variant, its chunks' record arrays with their k values,
-    and the divergence diagnoses. ``duration_s``: one for all, or one per variant; ``labels``: per
-    variant, a progress label (None: silent)."""
+    """Run every k of every variant (e.g. the valve settings of one scenario), each for its
+    duration, on one pool of ``solver.jobs`` processes (the first variant's), the cases shared out
+    by :func:`_worker_shares`; returns, per variant, its chunks' record arrays with their k values,
+    and the divergence diagnoses. ``labels``: per variant, a progress label (None: silent)."""
     labels = list(labels or [None] * len(variants))
-    durations = [float(duration_s)] * len(variants) if np.ndim(duration_s) == 0 else list(duration_s)
     shares = _worker_shares([v.k_W_per_K for v in variants], variants[0].solver.jobs)
-    tasks = [[(variants[v], ks, make_car, durations[v], labels[v]) for v, ks in share] for share in shares]
+    tasks = [[(variants[v], ks, make_car, durations_s[v], labels[v]) for v, ks in share] for share in shares]
     if len(tasks) == 1:
         done = [_run_chunks(tasks[0])]
     else:
@@ -141,22 +139,16 @@ def simulate_scenarios(scenarios: Sequence[Scenario], settings: Sequence[Optiona
     scenarios (default: their names)."""
     named = any(s is not None for s in settings)
     show = progress is not None and not progress.quiet
-    variants, owners, labels = [], [], []
-    for i, scenario in enumerate(scenarios):
-        for valves in settings:
-            variant = scenario if valves is None else scenario.with_valves(valves)
-            variants.append(variant)
-            owners.append(i)
-            name = names[i] if names else scenario.name
-            labels.append((name + (f" valves {'on' if variant.circuit.valves else 'off'}" if named else ""))
-                          if show else None)
-    results = simulate_variants(variants, make_car, [durations_s[i] for i in owners], labels)
+    variants = [scenario if valves is None else scenario.with_valves(valves)
+                for scenario in scenarios for valves in settings]       # scenario by scenario
+    n = len(settings)
+    labels = [((names[i // n] if names else v.name) + (f" valves {'on' if v.circuit.valves else 'off'}" if named else ""))
+              if show else None for i, v in enumerate(variants)]
+    results = simulate_variants(variants, make_car, [durations_s[i // n] for i in range(len(variants))], labels)
     out = []
     for i in range(len(scenarios)):
         datasets, diagnoses = [], []
-        for variant, owner, (chunks, diag) in zip(variants, owners, results):
-            if owner != i:
-                continue
+        for variant, (chunks, diag) in zip(variants[i * n:(i + 1) * n], results[i * n:(i + 1) * n]):
             circuit = variant.circuit.compile()
             valves = variant.circuit.valves
             parts = [car_dataset(arrays, ks, valves, named, circuit.link_names, circuit.valve_names)

@@ -19,6 +19,7 @@ default pair.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import math
 import os
@@ -33,7 +34,7 @@ import numpy as np
 from cosim.errors import ScenarioError
 from cosim.kinds.base import Kind
 from cosim.limits.checks import CaseMetrics
-from cosim.results.io import Progress
+from cosim.results.io import Progress, atomic_write
 from cosim.results.outcome import Outcome
 from cosim.results.plots import Curve, Figure, Panel, k_legend
 from cosim.scenario.model import Scenario
@@ -142,21 +143,23 @@ def parse(data, vehicle: VehicleParams, path: Path) -> StabilityTest:
     return test
 
 
-def duration_s(test: StabilityTest) -> float:
-    """The longest time-domain run (brute force, ramp-down); without them the analysis integrates
-    nothing (a nominal second, so that the solver's steps pass their checks)."""
+def _run_durations_s(test: StabilityTest) -> List[float]:
+    """The durations of the time-domain runs (brute force, each ramp-down)."""
     runs = [test.nonlinear_s] if test.nonlinear_speeds_m_per_s else []
     if test.ramp_from_m_per_s is not None:
-        runs.append(test.ramp_duration_s(min(test.ramp_decelerations_m_per_s2)))
-    return max(runs, default=1.0)
+        runs += [test.ramp_duration_s(a) for a in test.ramp_decelerations_m_per_s2]
+    return runs
+
+
+def duration_s(test: StabilityTest) -> float:
+    """The longest time-domain run; without one the analysis integrates nothing (a nominal second,
+    so that the solver's steps pass their checks)."""
+    return max(_run_durations_s(test), default=1.0)
 
 
 def shortest_duration_s(test: StabilityTest) -> float:
     """The shortest time-domain run (faults must happen within every run)."""
-    runs = [test.nonlinear_s] if test.nonlinear_speeds_m_per_s else []
-    if test.ramp_from_m_per_s is not None:
-        runs.append(test.ramp_duration_s(max(test.ramp_decelerations_m_per_s2)))
-    return min(runs, default=1.0)
+    return min(_run_durations_s(test), default=1.0)
 
 
 def valve_settings(test: StabilityTest, valves: bool) -> Tuple[bool, ...]:
@@ -183,23 +186,25 @@ def refuse_limit(metric: str, op: str, limit: float, test: StabilityTest) -> Opt
 
 def contact_table_csv(test: StabilityTest, vehicle: VehicleParams) -> str:
     """The contact table the test asks for, as a CSV file (kept in the temporary folder under its
-    content's hash); "" for the default S1002 / UIC60 table."""
+    content's hash); "" for the default S1002 / UIC60 table. Derived once per process and input
+    (every car of a run asks for it; a wheel profile's table takes ~1.5 s to derive)."""
+    if test.conicity is None and test.wheel_profile is None:
+        return ""
+    profile = test.wheel_profile
+    stamp = os.stat(profile).st_mtime_ns if profile is not None else None   # a profile edited since: anew
+    return _table_file(test.conicity, profile, stamp, float(vehicle.wheel_radius_m))
+
+
+@functools.lru_cache(maxsize=16)
+def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp, r0: float) -> str:
     from vehicle.wheelrail.derive_table import derive_default  # exudyn-free, but heavy
     from vehicle.wheelrail.geometry import ContactTable
-    r0 = float(vehicle.wheel_radius_m)
-    if test.conicity is not None:
-        table = ContactTable.cone(test.conicity, r0_m=r0)
-    elif test.wheel_profile is not None:
-        table = derive_default(r0, wheel_file=test.wheel_profile)
-    else:
-        return ""
+    table = ContactTable.cone(conicity, r0_m=r0) if conicity is not None else derive_default(r0, wheel_file=wheel_profile)
     text = table.to_csv()
     file = Path(tempfile.gettempdir()) / "pneumorail_tables" / f"{hashlib.sha256(text.encode()).hexdigest()[:16]}.csv"
-    file.parent.mkdir(parents=True, exist_ok=True)
     if not file.exists():                                  # whole or not at all (a killed write leaves no table)
-        partial = file.with_suffix(f".{os.getpid()}.part")
-        partial.write_text(text)
-        os.replace(partial, file)
+        with atomic_write(file) as fh:
+            fh.write(text)
     return str(file)
 
 
@@ -258,8 +263,9 @@ def static_stiffness_N_per_m(air) -> np.ndarray:
 class _Cars:
     """The car's linearisation at each speed, computed once (it does not depend on k)."""
 
-    def __init__(self, scenario: Scenario, F0, K_b, contact: ContactParams):
+    def __init__(self, scenario: Scenario, F0, K_b, contact: ContactParams, rail_inputs: bool = False):
         self.scenario, self.F0, self.K_b, self.contact = scenario, F0, np.asarray(K_b, float), contact
+        self.rail_inputs = rail_inputs                    # linearise_car's: a ride's level response needs them
         self._done: Dict[float, object] = {}
 
     def __call__(self, v: float):
@@ -267,7 +273,7 @@ class _Cars:
         key = round(float(v), 9)
         if key not in self._done:
             car = make_car(self.scenario, key, self.contact)
-            self._done[key] = linearise_car(car, self.F0, self.K_b)
+            self._done[key] = linearise_car(car, self.F0, self.K_b, self.rail_inputs)
         return self._done[key]
 
 

@@ -248,6 +248,9 @@ def level_response(model: CoupledModel, omega_rad_per_s, wheelset_x_m, coordinat
     their rate (rail_rate_input); a ride's floor acceleration and its power spectrum follow
     (|H|^2 times the level's spectrum at w = V Omega)."""
     car = model.car
+    if car.rail_input is None:
+        raise ValueError("level_response needs the car linearised with its rail inputs "
+                         "(vehicle.car.linear.linearise_car(..., rail_inputs=True))")
     j = car.coordinates.index(tuple(coordinate))
     V = car.speed_m_per_s
     n = model.A.shape[0]

@@ -269,9 +269,9 @@ def test_brute_force_onset_on_a_cone_agrees_with_the_linear_critical_speed(tmp_p
 def test_ramp_down_follows_the_limit_cycle_below_the_linear_critical_speed(tmp_path):
     """The car with dampers on S1002 / UIC60, released at 3 mm at 45 m/s (above its linear critical
     speed, 40.3 m/s), settles on a hunting limit cycle (~1.8 mm at the leading wheelset) and keeps
-    it while slowing down far below the linear critical speed -- the small-amplitude conicity of
-    the pair is above its conicity at the centre (docs/stability.md): the bifurcation is
-    subcritical -- until it collapses near 27-28 m/s. Halving the deceleration (1 -> 0.5 m/s^2)
+    it while slowing down far below the linear critical speed (the bifurcation is subcritical; the
+    pair's conicity at small amplitude, above its conicity at the centre, would explain it, not
+    isolated: docs/stability.md) until it collapses near 27-28 m/s. Halving the deceleration (1 -> 0.5 m/s^2)
     moves that speed by 0.75 m/s (2.7 %): asked within 5 %. 25 s of wall time."""
     data = {"kind": "stability", "name": "ramp", "k_W_per_K": [10], "vehicle": "metro_car_arb_dampers",
             "circuit": {"layout": "four_point", "preset": "paper_table1", "valves": False},
@@ -335,6 +335,20 @@ def test_a_wheel_profile_file_gives_the_table_derived_from_it(tmp_path):
     derived = run(load_scenario(write_scenario(tmp_path, data, "profile.yaml")))
     assert derived.info["contact_table"].endswith(".csv")
     assert derived.rows[0]["critical_speed_m_per_s"] == pytest.approx(shipped.rows[0]["critical_speed_m_per_s"], rel=1e-9)
+    # and another profile is not ignored: the same wheel with its points tilted (z + 0.05 y, an
+    # equivalent conicity of 0.39 instead of 0.63 at 0.5 mm) hunts at another speed
+    lines = []
+    for line in (tmp_path / "my_wheel.prw").read_text().splitlines():
+        parts = line.split("\t")
+        if len(parts) == 2 and not line.startswith("!"):
+            y, z = map(float, parts)
+            line = f"{y:.7E}\t{z + 0.05 * y:.7E}"
+        lines.append(line)
+    (tmp_path / "tilted.prw").write_text("\n".join(lines) + "\n")
+    data["stability"]["wheel_profile"] = "tilted.prw"
+    tilted = run(load_scenario(write_scenario(tmp_path, data, "tilted.yaml")))
+    assert tilted.info["contact_table"] != derived.info["contact_table"]
+    assert abs(tilted.rows[0]["critical_speed_m_per_s"] - shipped.rows[0]["critical_speed_m_per_s"]) > 1.0
 
 
 @pytest.mark.slow
@@ -368,7 +382,7 @@ def test_floor_acceleration_rms_against_the_linearised_model(tmp_path):
     car = make_car(s, V)
     F0 = car.static_bellow_forces_N()
     air = _air(s, False, k, F0)
-    model = couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.stability, s.vehicle))(V), air)
+    model = couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.stability, s.vehicle), rail_inputs=True)(V), air)
     shortest, longest = data["ride"]["irregularity"]["wavelength_range_m"]
     omega = np.linspace(2 * np.pi / longest, 2 * np.pi / shortest, 20001)
     H = level_response(model, omega * V, car.wheelset_x_m, ("carbody", "z"))

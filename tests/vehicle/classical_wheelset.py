@@ -178,16 +178,6 @@ FLAG_NAMES = ("long_creep", "lat_creep", "spin_creep", "grav", "load_transfer",
 FLAGS_ALL = dict(long_creep=True, lat_creep=True, spin_creep=True, grav=True,
                  load_transfer=True, roll_kin=True, gyro_yaw=True, gyro_roll=True,
                  grav_yaw=True, spin_axle_tilt=True, exact_cone_geometry=False)
-# the task statement read literally: spin uses -Omega sin(gamma) (no axle tilt), no
-# contact shift with yaw, gyroscopic roll moment assumed to do nothing laterally
-FLAGS_BRIEF = dict(FLAGS_ALL, spin_axle_tilt=False, grav_yaw=False, gyro_roll=False)
-# textbook Wickens: f11, f22, equal-load gravitational stiffness W lam / b
-FLAGS_TEXTBOOK = {k: False for k in FLAG_NAMES}
-FLAGS_TEXTBOOK.update(long_creep=True, lat_creep=True, grav=True)
-
-PARAMS_EXAMPLE = dict(m=800.0, I_z=494.0, I_s=49.0, r0=0.42, b=0.75, lam=0.2,
-                      W=58860.0, f11=8e6, f22=8e6, f23=1e4, f33=1e3,
-                      k_y=4.34e6, k_psi=35e6)
 
 
 def _get(p, k):
@@ -290,63 +280,3 @@ def critical_speed(p, v_lo=0.5, v_hi=200.0, tol=1e-4, flags=None, n_scan=2000, *
         else:
             bb = mid
     return 0.5 * (a + bb)
-
-
-def klingel_check(p, V=2.0, flags=None):
-    """k_y = k_psi = 0; returns (f_mode [Hz], V/L_K [Hz], eigenvalues)."""
-    q = dict(p) if isinstance(p, dict) else {k: _get(p, k) for k in PARAMS_EXAMPLE}
-    q.update(k_y=0.0, k_psi=0.0)
-    ev = eigenvalues(V, q, FLAGS_TEXTBOOK if flags is None else flags)
-    osc = ev[np.abs(ev.imag) > 1e-9]
-    zeta = -osc.real / np.abs(osc)
-    lam_mode = osc[np.argmin(zeta)]
-    LK = 2 * np.pi * np.sqrt(q["r0"] * q["b"] / q["lam"])
-    return abs(lam_mode.imag) / (2 * np.pi), V / LK, ev
-
-
-def _fmt(ev):
-    return "  ".join(f"{z.real:+11.4f}{z.imag:+11.4f}j" for z in ev)
-
-
-if __name__ == "__main__":
-    p = PARAMS_EXAMPLE
-    cases = [
-        ("ALL (physical, this derivation)", FLAGS_ALL),
-        ("STATEMENT-literal (no axle tilt in spin, no grav_yaw, no gyro_roll)", FLAGS_BRIEF),
-        ("TEXTBOOK Wickens (f11, f22, grav W*lam/b, equal loads)", FLAGS_TEXTBOOK),
-        ("TEXTBOOK + load_transfer (grav ~ 2 W lam/b, creep amplification)",
-         dict(FLAGS_TEXTBOOK, load_transfer=True)),
-    ]
-    np.set_printoptions(precision=6, linewidth=150)
-    for name, fl in cases:
-        print("=" * 100)
-        print(name)
-        for V in (10.0, 30.0, 60.0):
-            M, C, K = wheelset_matrices(V, p, fl)
-            print(f"  V={V:5.1f}  eig: {_fmt(eigenvalues(V, p, fl))}")
-            print(f"          C={C.ravel()}  K={K.ravel()}")
-        print(f"  critical speed (0.5..200 m/s): {critical_speed(p, flags=fl):.4f} m/s;"
-              f"  extended scan 0.5..3000 m/s: {critical_speed(p, v_hi=3000.0, flags=fl):.4f} m/s")
-
-    print("=" * 100)
-    print("Effect of each flag, toggled one at a time from ALL (critical speed, scan 0.5..3000 m/s):")
-    for k in FLAG_NAMES:
-        if k == "exact_cone_geometry":
-            fl = dict(FLAGS_ALL, exact_cone_geometry=True)
-            tag = "ON "
-        else:
-            fl = dict(FLAGS_ALL, **{k: False})
-            tag = "off"
-        print(f"  {k:20s} {tag}: {critical_speed(p, v_hi=3000.0, flags=fl):10.4f}")
-    q = dict(p, k_y=0.5e6, k_psi=1.0e6)
-    print("Softer springs (k_y=0.5e6, k_psi=1e6), critical speed 0.5..200 m/s:  "
-          + ",  ".join(f"{n}: {critical_speed(q, flags=fl):.4f}" for n, fl in
-                       (("ALL", FLAGS_ALL), ("BRIEF", FLAGS_BRIEF), ("TEXTBOOK", FLAGS_TEXTBOOK))))
-
-    print("=" * 100)
-    print("Klingel check (k_y = k_psi = 0, textbook terms, V = 2 m/s):")
-    fm, fk, ev = klingel_check(p, 2.0)
-    print(f"  eig: {_fmt(ev)}")
-    print(f"  lightly damped mode f = {fm:.6f} Hz,  V/L_K = {fk:.6f} Hz,  ratio = {fm / fk:.6f}")
-    fm0, fk0, _ = klingel_check(dict(p, W=0.0), 2.0)
-    print(f"  same with W=0 (no grav. stiffness): f = {fm0:.6f} Hz, ratio = {fm0 / fk0:.6f}")

@@ -20,7 +20,7 @@ motion: nothing to hunt).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import exudyn as exu
 import numpy as np
@@ -63,11 +63,11 @@ class CarLinearisation:
     maxwell_rate_per_s : (m,) array
         k_s / c1: y' = k_s / c1 (d - y) [1/s].
     maxwell_names : list of str
-    rail_input : (n, 4) array
+    rail_input : (n, 4) array or None
         Generalized force per metre of vertical rail motion under each wheelset (both of its rails
-        up: the track's vertical level) [N/m, N m/m].
-    rail_rate_input : (n, 4) array
-        Generalized force per m/s of that motion's rate [N s/m, N m s/m].
+        up: the track's vertical level) [N/m, N m/m]; None unless asked for (``rail_inputs``).
+    rail_rate_input : (n, 4) array or None
+        Generalized force per m/s of that motion's rate [N s/m, N m s/m]; None unless asked for.
     residual_N : float
         The largest reduced force (moment) left at the steady state [N, N m].
     reaction_N : float
@@ -85,8 +85,8 @@ class CarLinearisation:
     maxwell_deflection: np.ndarray
     maxwell_rate_per_s: np.ndarray
     maxwell_names: List[str]
-    rail_input: np.ndarray
-    rail_rate_input: np.ndarray
+    rail_input: Optional[np.ndarray]
+    rail_rate_input: Optional[np.ndarray]
     residual_N: float
     reaction_N: float
     speed_m_per_s: float
@@ -145,11 +145,13 @@ def _crushing(car) -> np.ndarray:
     return car.bellow_crushing()[0]
 
 
-def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m) -> CarLinearisation:
+def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m, rail_inputs: bool = False) -> CarLinearisation:
     """The car (contact guidance, straight ideal track) linearised about steady running at its
     speed, with each bellow's force F_n = ``bellow_force_N`` (4,) and stiffness at frozen air
     ``bellow_stiffness_N_per_m`` (4,) (see the module docstring). The car's state is moved to the
-    steady state; the car serves the analysis only afterwards."""
+    steady state; the car serves the analysis only afterwards. ``rail_inputs``: also the rails'
+    vertical input (32 more evaluations of the car's forces; a ride's response to the track's
+    level needs it, the eigenvalues do not)."""
     if getattr(car, "guidance", "") != "contact":
         raise ValueError("linearise_car needs a car with guidance='contact'")
     mbs, solver = car.mbs, car._solver
@@ -214,7 +216,7 @@ def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m) -> CarLinearisa
             d.y_sym.SetValue(d.y + sign * h)
         W[:, i] = force_difference(apply) / (2.0 * h)
     rates = np.array([d.k_s / d.c1 for d in maxwell])
-    rail, rail_rate = _rail_inputs(car, force_difference)
+    rail, rail_rate = _rail_inputs(car, force_difference) if rail_inputs else (None, None)
     return CarLinearisation(lin, coordinates, B, Z, Zu, W, Wd, rates, [d.name for d in maxwell], rail, rail_rate,
                             residual, _reaction(car, N), float(car.speed_m_per_s))
 
