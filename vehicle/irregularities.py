@@ -347,16 +347,26 @@ class TrackIrregularity:
         # one interpolant for the four columns: one evaluation per call (the car calls it every
         # internal step)
         values = np.stack([getattr(self, n) for n in COLUMNS[1:]], axis=-1)
-        object.__setattr__(self, "_spline", PchipInterpolator(s, values, axis=0))
+        spline = PchipInterpolator(s, values, axis=0)
+        # its breakpoints and coefficients, as the kernel takes them (scipy's properties convert
+        # on every access)
+        object.__setattr__(self, "_pieces", (np.ascontiguousarray(spline.x),
+                                             np.ascontiguousarray(spline.c)))
 
     # --- evaluation --------------------------------------------------------------------------
     def __call__(self, s_m) -> IrregularityValues:
         """(lateral_m, vertical_m, cross_level_m, gauge_m) at s [m]; zero outside the range."""
-        s = np.asarray(s_m, dtype=float)
-        v = _piecewise_cubic_at(self._spline.x, self._spline.c, s.ravel()).reshape(s.shape + (4,))
+        v = self.stacked(s_m)
         if v.ndim == 1:
             return IrregularityValues(*(float(x) for x in v))
         return IrregularityValues(*(v[..., j] for j in range(4)))
+
+    def stacked(self, s_m) -> np.ndarray:
+        """The four channels at s [m] as one array, shaped like s with a last axis of 4 (the
+        columns in :meth:`__call__`'s order); finite everywhere (zero outside the range and at
+        NaN)."""
+        s = np.asarray(s_m, dtype=float)
+        return _piecewise_cubic_at(*self._pieces, s.ravel()).reshape(s.shape + (4,))
 
     def rail_offsets(self, s_m) -> RailOffsets:
         """Each rail's lateral (y, + left) and vertical (z, + up) offset [m] at s::

@@ -353,3 +353,27 @@ def test_flexible_track_gets_the_opposite_of_the_contact_forces(law):
         dq = qn - q
         work = Q0 @ dq - preload * moved.n[2] * dq[8]
         assert abs(work) < 1e-5 * np.abs(Q0[:3]).max() * d, (axis, work)
+
+
+def test_offsets_along_and_across_the_track_are_the_projections_on_the_frames(contact):
+    """The PreStep's compiled offsets (longitudinal along each frame's tangent t, lateral along
+    its l, at q + h q_t) against numpy projections on the frames of ``_frames`` (a Python
+    reading of the same rows), and the table check against the table's range: every wheel's
+    y - e inside. Tolerance 1e-15 m: the same three products summed (rounding at most)."""
+    rng = np.random.default_rng(15)
+    lo, hi = contact.table.y_range_m
+    seen = set()
+    for q, qt in states(contact, rng, 30):
+        h = 5e-3
+        ahead = q + h * qt
+        along = contact.longitudinal_offsets(q, qt, h)
+        across, inside = contact.lateral_positions(q, qt, h)
+        for i, fr in enumerate(contact._frames):
+            d = REFS[i] + ahead[7 * i:7 * i + 3] - np.array([fr.ox, fr.oy, fr.oz])
+            assert along[i] == pytest.approx(np.dot(fr.t, d), abs=1e-15)
+            assert across[i] == pytest.approx(np.dot(fr.l, d), abs=1e-15)
+        wheels = [across[i] - fr.rails[side][0] for i, fr in enumerate(contact._frames)
+                  for side in range(2)]
+        assert inside == all(lo <= y <= hi for y in wheels)
+        seen.add(inside)
+    assert seen == {True, False}  # the states include wheelsets beyond the table

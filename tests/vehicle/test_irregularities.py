@@ -393,3 +393,27 @@ def test_the_car_reads_an_irregularity_function_as_its_contract_says(irregularit
     expected = irregularity(s0 + 20.0 * times)
     for got, want in zip(values, expected if not hasattr(expected, "__next__") else [0.0] * 4):
         np.testing.assert_array_equal(got, np.broadcast_to(want, (3, 4)))
+
+
+def test_the_contact_cars_rails_are_the_irregularitys_rail_offsets():
+    """The contact car's rails at each step (vehicle.car.hooks._rails_from: one compiled pass
+    over the irregularity at t - d, t, t + d plus rail_height_m) against
+    TrackIrregularity.rail_offsets, written separately: each rail's offsets at t, and their
+    rates as the central differences of rail_offsets. Tolerance: 1e-15 m on the offsets (the
+    same sums, in another order at most), 1e-15 m / (2 d) on the rates (the differences of
+    those values)."""
+    from vehicle.car.hooks import _rails_from
+    irr = TrackIrregularity.from_psd("erri_b176_low", 200.0, 0.25, seed=7)
+    s = np.array([[30.0, 31.9, 40.0, 41.9]]) + np.array([[-0.02], [0.0], [0.02]])
+    z_rail = np.random.default_rng(3).normal(0.0, 1e-3, (3, 8))
+    d = 1e-3
+    got = _rails_from(irr.stacked(s), z_rail, d)
+    off = [irr.rail_offsets(row) for row in s]  # per time: y_L, z_L, y_R, z_R, each (4,)
+    for side, (y, z) in enumerate((("y_left_m", "z_left_m"), ("y_right_m", "z_right_m"))):
+        e = np.array([getattr(o, y) for o in off])
+        zr = np.array([getattr(o, z) for o in off]) + z_rail[:, side::2]
+        np.testing.assert_allclose(got[:, side, 0], e[1], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(got[:, side, 2], zr[1], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(got[:, side, 1], (e[2] - e[0]) / (2 * d), rtol=0, atol=1e-15 / d)
+        np.testing.assert_allclose(got[:, side, 3], (zr[2] - zr[0]) / (2 * d), rtol=0, atol=1e-15 / d)
+    assert np.abs(got[:, :, 1]).max() > 1e-6  # the rates are not trivially zero

@@ -8,7 +8,9 @@ import math
 import exudyn as exu
 import numpy as np
 
+from ..irregularities import TrackIrregularity
 from ..suspension import maxwell_step
+from ..wheelrail.compiled import kernel
 
 _OUT = exu.OutputVariableType
 
@@ -30,6 +32,31 @@ def _four_channels(values: tuple, shape: tuple) -> np.ndarray | None:
         return None
 
 
+@kernel(__file__)
+def _rails_from(irregularity, z_rail, d):
+    """Per wheelset and rail (left, right) the rail's (e, de/dt, zr, dzr/dt) at t, (n, 2, 4),
+    from the ``irregularity`` (3, n, 4): (lateral, vertical, cross_level, gauge) under the n
+    wheelsets at t - d, t, t + d, and the rail heights ``z_rail`` (3, 2n) of ``rail_height_m``
+    at those times. Each rail moves by e_L,R = lateral +- gauge / 2, zr_L,R = z_rail + (vertical
+    -+ cross_level / 2) (the signs of :mod:`vehicle.irregularities`); the rates are central
+    differences over +-d."""
+    n = irregularity.shape[1]
+    e, z = np.empty((3, 2 * n)), np.empty((3, 2 * n))
+    for k in range(3):
+        for i in range(n):
+            lateral, vertical, cross, gauge = irregularity[k, i]
+            e[k, 2 * i], e[k, 2 * i + 1] = lateral + 0.5 * gauge, lateral - 0.5 * gauge
+            z[k, 2 * i] = z_rail[k, 2 * i] + (vertical - 0.5 * cross)
+            z[k, 2 * i + 1] = z_rail[k, 2 * i + 1] + (vertical + 0.5 * cross)
+    out = np.empty((n, 2, 4))
+    for j in range(2 * n):
+        out[j // 2, j % 2, 0] = e[1, j]
+        out[j // 2, j % 2, 1] = (e[2, j] - e[0, j]) / (2.0 * d)
+        out[j // 2, j % 2, 2] = z[1, j]
+        out[j // 2, j % 2, 3] = (z[2, j] - z[0, j]) / (2.0 * d)
+    return out
+
+
 class StepHooks:
     """Per-step user functions and the track they read."""
 
@@ -38,16 +65,19 @@ class StepHooks:
         each wheelset's own offset along the track with contact guidance (shaped like s0 + v t)."""
         return self._s0_wheelset + self._distance_m(t) + self._ds_wheelset
 
-    def _track_at(self, t: float) -> list[tuple[float, ...]]:
+    def _track_at(self, t: float) -> np.ndarray:
         """Track centre line (x, y, heading, cant, curvature, d(cant)/ds) under each wheelset
-        at time t: 4 tuples (with contact guidance a fifth: under the car centre, where the
-        drive holds the carbody)."""
-        s = self._wheelset_s_m(t).tolist()
+        at time t: (4, 6), rows as :meth:`~vehicle.guidance.TrackSampler.rows` gives them (with
+        contact guidance (5, 6): the last under the car centre, where the drive holds the
+        carbody)."""
+        s = self._wheelset_s_m(t)
         if self._contact_mode:
-            s.append(self.start_s_m + self._distance_m(t))
+            s = np.append(s, self.start_s_m + self._distance_m(t))
         if self._sampler is None:
-            return [(si, 0.0, 0.0, 0.0, 0.0, 0.0) for si in s]
-        return self._sampler.at(s)
+            rows = np.zeros((s.size, 6))
+            rows[:, 0] = s
+            return rows
+        return self._sampler.rows(s)
 
     def _post_step(self, mbs, t: float) -> bool:
         """PostStep user function (only with Maxwell dampers): after an accepted step ending at
@@ -68,34 +98,39 @@ class StepHooks:
         self._maxwell_t = t
         return True
 
-    def _contact_rail_values(self, times) -> tuple[np.ndarray, np.ndarray]:
-        """(n, 8) lateral rail offsets e (+ left) and (n, 8) rail height offsets zr (+ up, normal
-        to the track plane) under each wheel at the n ``times`` (contact guidance; the cant is in
-        the track frame, not here), the irregularity evaluated once for all of them."""
-        times = np.atleast_1d(np.asarray(times, dtype=float))
+    def _contact_rails(self, t: float) -> np.ndarray:
+        """(4, 2, 4) per wheelset and rail (left, right) the rail's lateral offset e (+ left),
+        de/dt, height offset zr (+ up, normal to the track plane) and dzr/dt at time t (contact
+        guidance; the cant is in the track frame, not here): ``rail_height_m`` plus the
+        irregularity (:func:`_rails_from`), the rates central differences over
+        +-:attr:`RAIL_RATE_DT_S`."""
+        d = self.RAIL_RATE_DT_S
+        times = np.array([t - d, t, t + d])
         if self._rail_fn is None:
-            z = np.zeros((times.size, 8))
+            z = np.zeros((3, 8))
         else:
-            z = np.array([self._rail_fn(float(t)) for t in times], dtype=float)
-            if z.shape != (times.size, 8):
+            z = np.array([self._rail_fn(float(ti)) for ti in times], dtype=float)
+            if z.shape != (3, 8):
                 raise ValueError(f"rail_height_m(t) must return shape (8,), got {z.shape[1:]}")
-        e = np.zeros((times.size, 8))
-        if self._irr is not None:
-            lat, ver, cross, gauge = self._irregularity_at(times[:, None])
-            e[:, 0::2], e[:, 1::2] = lat + 0.5 * gauge, lat - 0.5 * gauge
-            z[:, 0::2] += ver - 0.5 * cross
-            z[:, 1::2] += ver + 0.5 * cross
-        return e, z
+        if self._irr is None:
+            irr = np.zeros((3, 4, 4))
+        else:
+            irr = self._irregularity_at(times[:, None], stacked=True)
+        return _rails_from(irr, z, d)
 
-    def _irregularity_at(self, t) -> tuple[np.ndarray, ...]:
+    def _irregularity_at(self, t, stacked: bool = False):
         """(lateral, vertical, cross_level, gauge), each shaped like s = s0 + v t: (4,) under the
-        wheelsets at a time t, (n, 4) for times of shape (n, 1)."""
+        wheelsets at a time t, (n, 4) for times of shape (n, 1); ``stacked``: as one array
+        shaped like s with a last axis of 4."""
         s = self._wheelset_s_m(t)
+        if isinstance(self._irr, TrackIrregularity):  # finite by construction: no checks
+            v = self._irr.stacked(s)
+            return v if stacked else tuple(np.moveaxis(v, -1, 0))
         v = _four_channels(tuple(self._irr(s)), s.shape)
         if v is None or not np.isfinite(v).all():
             raise ValueError("irregularity(s) must return 4 finite arrays (lateral_m, "
                              "vertical_m, cross_level_m, gauge_m) shaped like s")
-        return tuple(v)
+        return np.moveaxis(v, 0, -1) if stacked else tuple(v)
 
     def _set_contact_track(self, t: float, state=None) -> None:
         """Track frames and rail offsets, with their rates, at the step end t (contact guidance).
@@ -105,17 +140,9 @@ class StepHooks:
         half a step, a first-order error (the straight irregular run's largest lateral wheel
         force moved 3015 / 2947 / 2921 N at 5 / 2.5 / 1.25 ms with step means, 2926 / 2928 /
         2931 N with the rates at t: car alone, 10 s of scenarios/straight_irregular.yaml)."""
-        state = state or self._track_at(t)[:4]
+        state = self._track_at(t)[:4] if state is None else state
         self._frames_t = t
-        if self._rail_fn is None and self._irr is None:
-            self._wr.set_track(state)
-            return
-        d = self.RAIL_RATE_DT_S
-        (em, e1, ep), (zm, z1, zp) = self._contact_rail_values((t - d, t, t + d))
-        ed, zd = (ep - em) / (2.0 * d), (zp - zm) / (2.0 * d)
-        rails = [tuple((e1[j], ed[j], z1[j], zd[j]) for j in (2 * i, 2 * i + 1))
-                 for i in range(4)]
-        self._wr.set_track(state, rails)
+        self._wr.set_track(state, self._contact_rails(t))
 
     def _pre_step_contact(self, mbs, t: float) -> bool:
         """PreStep with contact guidance: guidance offsets (the drive at the car centre, the
@@ -134,18 +161,17 @@ class StepHooks:
         sd, idx = mbs.systemData, self._wr_index
         q, q_t = sd.GetODE2Coordinates()[idx], sd.GetODE2Coordinates_t()[idx]
         if self._guided:  # the offsets predicted at t (the frames may be of t0 or, on a retry, of t)
-            ahead = np.asarray(q) + (t - t0) * np.asarray(q_t)
-            self._ds_wheelset = (self._ds_wheelset + np.asarray(self._wr.longitudinal_offsets(ahead))
+            self._ds_wheelset = (self._ds_wheelset + self._wr.longitudinal_offsets(q, q_t, t - t0)
                                  - self._distance_between_m(self._frames_t, t))
         if not self.speed_profile.constant:          # the law's frames and creepages run at v(t)
             self._wr.set_speed(self.speed_profile.speed(t))
         state = self._track_at(t)
         if self._guided:
             self._set_guidance(state)
-            self._heading_now = state[0][2]
+            self._heading_now = float(state[0, 2])
         self._set_contact_track(t, state[:4])
-        y = self._wr.lateral_positions_at_step_end(q, q_t, t - t0)
-        if not self._wr.in_table(y):  # predicted at the step end from the state at its start
+        y, inside = self._wr.lateral_positions(q, q_t, t - t0)
+        if not inside:  # predicted at the step end from the state at its start
             self._wr_left_table = (t0, y)
             return False
         return True
@@ -164,7 +190,8 @@ class StepHooks:
             h[1::2] += ver + 0.5 * cross
         if self._canted:
             b = self.params.contact_spacing_m / 2.0
-            for iw, (_, _, _, cant, _, _) in enumerate((track_state or self._track_at(t))[:4]):
+            rows = self._track_at(t) if track_state is None else track_state
+            for iw, (_, _, _, cant, _, _) in enumerate(np.asarray(rows)[:4].tolist()):
                 if cant != 0.0:
                     dz = b * math.sin(cant)  # track plane rolled by -cant: left down, right up
                     h[2 * iw] -= dz
@@ -176,11 +203,14 @@ class StepHooks:
         moved across the track by the lateral alignment (horizontally, normal to the tangent)."""
         lat = self._irregularity_at(t)[0]
         return [(x - math.sin(psi) * e, y + math.cos(psi) * e, psi, *rest)
-                for (x, y, psi, *rest), e in zip(track_state, lat.tolist())]
+                for (x, y, psi, *rest), e in zip(track_state.tolist(), lat.tolist())]
 
     def _set_guidance(self, track_state) -> None:
         """Guidance offsets (see :meth:`_add_wheelset_guidance`, :meth:`_add_drive`) for the
-        given track state (contact guidance: its fifth entry is the car centre's)."""
+        given track state (rows as :meth:`_track_at` gives them; contact guidance: its fifth
+        row is the car centre's)."""
+        if isinstance(track_state, np.ndarray):
+            track_state = track_state.tolist()
         if self._contact_mode:
             (xi, rz), (x, y, psi, *_) = self._drive_vars, track_state[4]
             xi.SetValue(math.cos(psi) * (x - self._x0_m) + math.sin(psi) * y)
@@ -220,7 +250,7 @@ class StepHooks:
         state = self._track_at(t) if self._guided else None
         if self._guided:
             self._set_guidance(state if self._irr is None else self._aligned(state, t))
-            self._heading_now = state[0][2]
+            self._heading_now = float(state[0, 2])
         if self._rail_fn is None and not self._canted and self._irr is None:
             return True  # level rails: nothing else changes
         t0 = mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)

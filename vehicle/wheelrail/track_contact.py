@@ -119,31 +119,34 @@ class _Frame(NamedTuple):
     rails: tuple  # ((e, e_t) left, (e, e_t) right): lateral rail offsets and rates
 
 
-def _frame(x, y, heading, cant, curvature, cant_rate, V, rails, b) -> _Frame:
-    (eL, eLt, zL, zLt), (eR, eRt, zR, zRt) = rails
-    cp, sp = math.cos(heading), math.sin(heading)
-    # track plane rolled by g = -cant (+ the rail height difference) about t
-    g = -cant + (zL - zR) / (2.0 * b)
-    g_t = -cant_rate * V + (zLt - zRt) / (2.0 * b)
-    cg, sg = math.cos(g), math.sin(g)
-    t = (cp, sp, 0.0)
-    l = (-sp * cg, cp * cg, sg)
-    n = (sp * sg, -cp * sg, cg)
-    w = (g_t, curvature * V * sg, curvature * V * cg)
-    return _Frame(float(x), float(y), 0.5 * (zL + zR), 0.5 * (zLt + zRt), t, l, n, w,
-                  float(curvature), ((float(eL), float(eLt)), (float(eR), float(eRt))))
-
-
-def _packed(fr: _Frame) -> list:
-    """A frame as a row of 21 floats (the kernels' input; :func:`_unpacked` reads it)."""
-    (eL, eLt), (eR, eRt) = fr.rails
-    return [fr.ox, fr.oy, fr.oz, fr.oz_t, *fr.t, *fr.l, *fr.n, *fr.w, fr.kappa, eL, eLt, eR,
-            eRt]
+def _frame_rows(frames, rails, V, b):
+    """The frames of the wheelsets (:class:`_Frame`) packed as rows of 21 floats, (n, 21): ox,
+    oy, oz, oz_t, t (3), l (3), n (3), w (3), kappa, eL, eL_t, eR, eR_t (:func:`_unpacked` reads
+    one), from ``frames`` (n, 6): (x, y, heading, cant, curvature, d(cant)/ds) of the centre line,
+    and ``rails`` (n, 2, 4): per side (left, right) the rail's (e, de/dt, zr, dzr/dt)."""
+    out = np.empty((frames.shape[0], 21))
+    for i in range(frames.shape[0]):
+        x, y, heading, cant, curvature, cant_rate = frames[i]
+        eL, eLt, zL, zLt = rails[i, 0]
+        eR, eRt, zR, zRt = rails[i, 1]
+        cp, sp = math.cos(heading), math.sin(heading)
+        # track plane rolled by g = -cant (+ the rail height difference) about t
+        g = -cant + (zL - zR) / (2.0 * b)
+        g_t = -cant_rate * V + (zLt - zRt) / (2.0 * b)
+        cg, sg = math.cos(g), math.sin(g)
+        row = out[i]
+        row[0], row[1], row[2], row[3] = x, y, 0.5 * (zL + zR), 0.5 * (zLt + zRt)
+        row[4], row[5], row[6] = cp, sp, 0.0                      # t
+        row[7], row[8], row[9] = -sp * cg, cp * cg, sg            # l
+        row[10], row[11], row[12] = sp * sg, -cp * sg, cg         # n
+        row[13], row[14], row[15] = g_t, curvature * V * sg, curvature * V * cg  # w
+        row[16], row[17], row[18], row[19], row[20] = curvature, eL, eLt, eR, eRt
+    return out
 
 
 @jitable
 def _unpacked(row) -> _Frame:
-    """The frame of a :func:`_packed` row."""
+    """The frame of a row of :func:`_frame_rows`."""
     return _Frame(row[0], row[1], row[2], row[3], (row[4], row[5], row[6]),
                   (row[7], row[8], row[9]), (row[10], row[11], row[12]),
                   (row[13], row[14], row[15]), row[16], ((row[17], row[18]), (row[19], row[20])))
@@ -198,7 +201,7 @@ def _lookup(table, side, y) -> WheelGeometry:
     """The wheel's (side 0 left, 1 right) geometry at y from the kernels' table
     ``(y rows, values (2, 9, rows), slopes (2, 9, rows - 1))``: linear interpolation; beyond
     the table its end rows hold (a derailing wheelset or a Newton iterate: the law stays finite
-    and the next PreStep stops the run, :meth:`WheelsetTrackContact.in_table`)."""
+    and the next PreStep stops the run, :meth:`WheelsetTrackContact.lateral_positions`)."""
     ys, values, slopes = table
     y = min(max(y, ys[0]), ys[-1])
     i = min(max(np.searchsorted(ys, y, side="right") - 1, 0), ys.size - 2)
@@ -289,6 +292,34 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
 
 #: the sources of every function the kernels compile (their cache is named by a digest of these)
 _DEPENDS = (__file__, _contact_law.__file__, compiled.__file__, kernel_ops.__file__)
+
+
+_frame_rows_kernel = kernel(*_DEPENDS)(_frame_rows)
+
+
+@kernel(*_DEPENDS)
+def _offsets_kernel(rows, ref, q, qt, h, lo, hi):
+    """Per wheelset the centre's offset along its frame's tangent t and across it along l
+    (minus the flexible track's lateral displacement), at q + h qt, and whether every wheel's
+    lateral position relative to its rail lies in [lo, hi] (frames: rows of
+    :func:`_frame_rows`)."""
+    n = ref.shape[0]
+    m = q.shape[0] // n
+    along, across = np.empty(n), np.empty(n)
+    inside = True
+    for i in range(n):
+        k = m * i
+        d0 = ref[i, 0] + (q[k] + h * qt[k]) - rows[i, 0]
+        d1 = ref[i, 1] + (q[k + 1] + h * qt[k + 1]) - rows[i, 1]
+        d2 = ref[i, 2] + (q[k + 2] + h * qt[k + 2]) - rows[i, 2]
+        along[i] = rows[i, 4] * d0 + rows[i, 5] * d1
+        y = rows[i, 7] * d0 + rows[i, 8] * d1 + rows[i, 9] * d2
+        if m == 10:
+            y = y - (q[k + 7] + h * qt[k + 7])
+        across[i] = y
+        for e in (rows[i, 17], rows[i, 19]):
+            inside = inside and lo <= y - e <= hi
+    return along, across, inside
 
 
 @kernel(*_DEPENDS)
@@ -440,22 +471,17 @@ class WheelsetTrackContact:
         :class:`~vehicle.guidance.TrackSampler` gives them). ``rails``: (n, 2, 4) per wheelset
         and side (left, right) the rail's (lateral offset e [m], de/dt [m/s], height offset zr
         [m], dzr/dt [m/s]); None = design rails."""
-        if rails is None:
-            rails = [((0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0))] * self.n
-        if not len(frames) == len(rails) == self.n:
-            raise ValueError(f"need {self.n} frames and rails, got {len(frames)} and "
-                             f"{len(rails)}")
-        V, b = self.V, self.b
-        self._frames = [_frame(*f, V, (tuple(r[0]), tuple(r[1])), b)
-                        for f, r in zip(frames, rails)]
-        self._frame_rows = np.array([_packed(f) for f in self._frames])
+        frames = np.asarray(frames, dtype=float)
+        rails = np.zeros((self.n, 2, 4)) if rails is None else np.asarray(rails, dtype=float)
+        if not (frames.shape == (self.n, 6) and rails.shape == (self.n, 2, 4)):
+            raise ValueError(f"need {self.n} frames of 6 values and rails of (2, 4), got "
+                             f"{frames.shape} and {rails.shape}")
+        self._frame_rows = _frame_rows_kernel(frames, rails, self.V, self.b)
 
-    def lateral_positions_at_step_end(self, q, q_t, h: float) -> list[float]:
-        """Lateral positions of the wheelsets predicted h later, y + h y' (``q``, ``q_t``: the
-        coordinates at the step start), for :meth:`in_table`."""
-        qq = q.tolist() if hasattr(q, "tolist") else list(q)
-        qt = q_t.tolist() if hasattr(q_t, "tolist") else list(q_t)
-        return self.lateral_positions([a + h * b for a, b in zip(qq, qt)])
+    @property
+    def _frames(self) -> list[_Frame]:
+        """The frames of the last :meth:`set_track` (for Python callers of the law)."""
+        return [_unpacked(row) for row in self._frame_rows.tolist()]
 
     # ------------------------------------------------------------------ interface
     def _args(self, q, q_t) -> tuple:
@@ -489,36 +515,28 @@ class WheelsetTrackContact:
         return WheelContactOutputs(wheels[:, 0], wheels[:, 1:4], wheels[:, 4], wheels[:, 5],
                                    wheels[:, 6:9], pose[:, 0], pose[:, 1], pose[:, 0] - pose[:, 2])
 
-    def in_table(self, lateral_m: Sequence[float]) -> bool:
-        """Whether every wheel's lateral position relative to its rail (``lateral_m[i]``: the
-        wheelset's lateral position relative to its track, :meth:`lateral_positions`, minus the
-        rail offsets of the current step) lies inside the table."""
+    def _predicted(self, q, q_t, h: float) -> tuple:
+        q = np.asarray(q, dtype=float)
+        q_t = np.zeros_like(q) if q_t is None else np.asarray(q_t, dtype=float)
+        if not q.shape == q_t.shape == (self.m * self.n,):  # the kernels do not check bounds
+            raise ValueError(f"q and q_t must have {self.m * self.n} entries, got {q.shape} and "
+                             f"{q_t.shape}")
+        return self._frame_rows, self._ref_arr, q, q_t, float(h)
+
+    def longitudinal_offsets(self, q, q_t=None, h: float = 0.0) -> np.ndarray:
+        """Offset [m] of each wheelset centre along its frame's tangent from the frame's origin,
+        at the coordinates q + h q_t (the frames of the last :meth:`set_track`)."""
+        return _offsets_kernel(*self._predicted(q, q_t, h), -math.inf, math.inf)[0]
+
+    def lateral_positions(self, q, q_t=None, h: float = 0.0) -> tuple[np.ndarray, bool]:
+        """Lateral position [m] of each wheelset centre in its track frame, relative to its
+        flexible track's lateral displacement (first order in the track's roll), at the
+        coordinates q + h q_t (the frames of the last :meth:`set_track`), and whether every
+        wheel's position relative to its rail (minus the rail's lateral offset) lies inside the
+        table."""
         lo, hi = self.table.y_range_m
-        return all(lo <= yi - fr.rails[s][0] <= hi
-                   for yi, fr in zip(lateral_m, self._frames) for s in range(2))
-
-    def longitudinal_offsets(self, q) -> list[float]:
-        """Offset of each wheelset centre along its frame's tangent from the frame's origin [m]
-        (cheap; the frames of the last :meth:`set_track`)."""
-        out = []
-        for i, (ref, fr) in enumerate(zip(self._ref, self._frames)):
-            k = self.m * i
-            t = fr.t
-            out.append(t[0] * (ref[0] + q[k] - fr.ox) + t[1] * (ref[1] + q[k + 1] - fr.oy))
-        return out
-
-    def lateral_positions(self, q) -> list[float]:
-        """Lateral position of each wheelset centre in its track frame [m], relative to its
-        flexible track's lateral displacement (cheap; first order in the track's roll)."""
-        out = []
-        m = self.m
-        for i, (ref, fr) in enumerate(zip(self._ref, self._frames)):
-            k = m * i
-            l = fr.l
-            y = (l[0] * (ref[0] + q[k] - fr.ox) + l[1] * (ref[1] + q[k + 1] - fr.oy)
-                 + l[2] * (ref[2] + q[k + 2] - fr.oz))
-            out.append(y - q[k + 7] if m == 10 else y)
-        return out
+        _, y, inside = _offsets_kernel(*self._predicted(q, q_t, h), lo, hi)
+        return y, bool(inside)
 
     def static_rise_m(self, wheel_load_N: float) -> float:
         """The law's z (rise of the centre above the centred rigid contact height; negative:
