@@ -377,3 +377,42 @@ def test_offsets_along_and_across_the_track_are_the_projections_on_the_frames(co
         assert inside == all(lo <= y <= hi for y in wheels)
         seen.add(inside)
     assert seen == {True, False}  # the states include wheelsets beyond the table
+
+
+@pytest.mark.parametrize("e_left_m, e_right_m, inside", [
+    (3e-3, 3e-3, True),   # both rails moved 3 mm towards it: y - e = hi - 1 mm on both
+    (3e-3, 0.0, False),   # the right wheel is 2 mm beyond (reading e_L for both: inside)
+    (0.0, 3e-3, False),   # the left wheel is (reading e_R for both: inside)
+    (0.0, 0.0, False),
+])
+def test_the_table_check_reads_each_wheel_against_its_own_rail(law, e_left_m, e_right_m, inside):
+    """A wheelset 2 mm beyond the table's upper end is inside it only where both of its rails'
+    lateral offsets take it back in: y - e <= hi for each wheel with its own rail's e. A sign
+    error (y + e) or one rail's offset for both wheels gives the opposite answer in one case."""
+    wr = WheelsetTrackContact(law, WheelsetParams(), REFS, R0, V)
+    hi = wr.table.y_range_m[1]
+    rails = [[(e_left_m, 0.0, 0.0, 0.0), (e_right_m, 0.0, 0.0, 0.0)]] + [[(0.0,) * 4] * 2] * 3
+    wr.set_track([(x, 0.0, 0.0, 0.0, 0.0, 0.0) for x in REFS[:, 0]], rails)
+    q = np.zeros(28)
+    q[1] = hi + 2e-3  # on straight level track the frame's l is the global y
+    y, got = wr.lateral_positions(q)
+    assert y[0] == pytest.approx(hi + 2e-3, abs=1e-15)
+    assert got is inside
+
+
+def test_offsets_on_a_flexible_track_are_relative_to_the_tracks_lateral_displacement(law):
+    """Flexible track (10 coordinates per wheelset, the 8th the track's lateral displacement):
+    the lateral position is the projection on l minus that displacement, both at q + h q_t."""
+    wr = WheelsetTrackContact(law, WheelsetParams(), REFS, R0, V, track_preload_N=30e3)
+    rng = np.random.default_rng(16)
+    frames = [(x, 0.01 * rng.standard_normal(), 0.02 * rng.standard_normal(), 0.05, 0.0, 0.0)
+              for x in REFS[:, 0]]
+    wr.set_track(frames)
+    q, qt, h = 1e-3 * rng.standard_normal(40), 1e-2 * rng.standard_normal(40), 5e-3
+    across, _ = wr.lateral_positions(q, qt, h)
+    along = wr.longitudinal_offsets(q, qt, h)
+    ahead = q + h * qt
+    for i, fr in enumerate(wr._frames):
+        d = REFS[i] + ahead[10 * i:10 * i + 3] - np.array([fr.ox, fr.oy, fr.oz])
+        assert across[i] == pytest.approx(np.dot(fr.l, d) - ahead[10 * i + 7], abs=1e-15)
+        assert along[i] == pytest.approx(np.dot(fr.t, d), abs=1e-15)

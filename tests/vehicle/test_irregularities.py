@@ -396,8 +396,9 @@ def test_the_car_reads_an_irregularity_function_as_its_contract_says(irregularit
 
 
 def test_the_contact_cars_rails_are_the_irregularitys_rail_offsets():
-    """The contact car's rails at each step (vehicle.car.hooks._rails_from: one compiled pass
-    over the irregularity at t - d, t, t + d plus rail_height_m) against
+    """The contact car's conversion of the irregularity into rails (vehicle.car.hooks._rails_from:
+    one compiled pass over the irregularity at t - d, t, t + d plus rail_height_m; how the car
+    calls it is exercised by the car's own tests) against
     TrackIrregularity.rail_offsets, written separately: each rail's offsets at t, and their
     rates as the central differences of rail_offsets. Tolerance: 1e-15 m on the offsets (the
     same sums, in another order at most), 1e-15 m / (2 d) on the rates (the differences of
@@ -417,3 +418,25 @@ def test_the_contact_cars_rails_are_the_irregularitys_rail_offsets():
         np.testing.assert_allclose(got[:, side, 1], (e[2] - e[0]) / (2 * d), rtol=0, atol=1e-15 / d)
         np.testing.assert_allclose(got[:, side, 3], (zr[2] - zr[0]) / (2 * d), rtol=0, atol=1e-15 / d)
     assert np.abs(got[:, :, 1]).max() > 1e-6  # the rates are not trivially zero
+
+
+def test_the_car_reads_a_track_irregularity_as_it_reads_any_function():
+    """A TrackIrregularity takes a shortcut in the car (one array, no checks): the same four
+    channels as calling it, at one time (shape (4,) each) and at three (shape (3, 4) each), and
+    stacked (channels last) for it and for a plain function alike."""
+    from types import SimpleNamespace
+
+    from vehicle.car.hooks import StepHooks
+    irr = TrackIrregularity.from_psd("erri_b176_low", 200.0, 0.25, seed=5)
+    s0 = np.array([30.0, 31.9, 40.0, 41.9])
+    s_of = lambda t: s0 + 20.0 * np.asarray(t)  # noqa: E731
+    for fn in (irr, lambda s: tuple(irr(s))):
+        car = SimpleNamespace(_irr=fn, _wheelset_s_m=s_of)
+        for t in (0.1, np.array([[0.1], [0.2], [0.3]])):
+            want = irr(s_of(t))
+            got = StepHooks._irregularity_at(car, t)
+            assert len(got) == 4
+            for g, w in zip(got, want):
+                np.testing.assert_array_equal(g, w)
+            stacked = StepHooks._irregularity_at(car, t, stacked=True)
+            np.testing.assert_array_equal(stacked, np.stack(want, axis=-1))

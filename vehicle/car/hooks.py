@@ -123,7 +123,8 @@ class StepHooks:
         wheelsets at a time t, (n, 4) for times of shape (n, 1); ``stacked``: as one array
         shaped like s with a last axis of 4."""
         s = self._wheelset_s_m(t)
-        if isinstance(self._irr, TrackIrregularity):  # finite by construction: no checks
+        if type(self._irr) is TrackIrregularity:  # finite by construction: no checks (a
+            # subclass may redefine __call__: it takes the general path)
             v = self._irr.stacked(s)
             return v if stacked else tuple(np.moveaxis(v, -1, 0))
         v = _four_channels(tuple(self._irr(s)), s.shape)
