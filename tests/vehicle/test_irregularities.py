@@ -429,7 +429,7 @@ def test_the_car_reads_a_track_irregularity_as_it_reads_any_function():
     from vehicle.car.hooks import StepHooks
     irr = TrackIrregularity.from_psd("erri_b176_low", 200.0, 0.25, seed=5)
     s0 = np.array([30.0, 31.9, 40.0, 41.9])
-    s_of = lambda t: s0 + 20.0 * np.asarray(t)  # noqa: E731
+    s_of = lambda t: s0 + 20.0 * np.asarray(t)
     for fn in (irr, lambda s: tuple(irr(s))):
         car = SimpleNamespace(_irr=fn, _wheelset_s_m=s_of)
         for t in (0.1, np.array([[0.1], [0.2], [0.3]])):
