@@ -378,17 +378,16 @@ def test_unit_limit_can_be_raised(tmp_path):
 def test_the_car_reads_an_irregularity_function_as_its_contract_says(irregularity, ok):
     """MetroCar's per-step reading of ``irregularity(s)`` (vehicle.car.hooks): four arrays shaped
     like s (or broadcasting to it), finite; anything else a ValueError saying what is expected."""
-    from types import SimpleNamespace
-
     from vehicle.car.hooks import StepHooks
     s0 = np.array([1.0, 3.0, 10.0, 12.0])
-    car = SimpleNamespace(_irr=irregularity, _wheelset_s_m=lambda t: s0 + 20.0 * np.asarray(t))
+    car = StepHooks()  # the hooks alone, on these two attributes
+    car._irr, car._wheelset_s_m = irregularity, lambda t: s0 + 20.0 * np.asarray(t)
     times = np.array([[0.1], [0.2], [0.3]])
     if not ok:
         with pytest.raises(ValueError, match="4 finite arrays"):
-            StepHooks._irregularity_at(car, times)
+            car._irregularity_at(times)
         return
-    values = StepHooks._irregularity_at(car, times)
+    values = car._irregularity_at(times)
     assert len(values) == 4 and all(v.shape == (3, 4) for v in values)
     expected = irregularity(s0 + 20.0 * times)
     for got, want in zip(values, expected if not hasattr(expected, "__next__") else [0.0] * 4):
@@ -424,19 +423,19 @@ def test_the_car_reads_a_track_irregularity_as_it_reads_any_function():
     """A TrackIrregularity takes a shortcut in the car (one array, no checks): the same four
     channels as calling it, at one time (shape (4,) each) and at three (shape (3, 4) each), and
     stacked (channels last) for it and for a plain function alike."""
-    from types import SimpleNamespace
 
     from vehicle.car.hooks import StepHooks
     irr = TrackIrregularity.from_psd("erri_b176_low", 200.0, 0.25, seed=5)
     s0 = np.array([30.0, 31.9, 40.0, 41.9])
     s_of = lambda t: s0 + 20.0 * np.asarray(t)
     for fn in (irr, lambda s: tuple(irr(s))):
-        car = SimpleNamespace(_irr=fn, _wheelset_s_m=s_of)
+        car = StepHooks()  # the hooks alone, on these two attributes
+        car._irr, car._wheelset_s_m = fn, s_of
         for t in (0.1, np.array([[0.1], [0.2], [0.3]])):
             want = irr(s_of(t))
-            got = StepHooks._irregularity_at(car, t)
+            got = car._irregularity_at(t)
             assert len(got) == 4
             for g, w in zip(got, want):
                 np.testing.assert_array_equal(g, w)
-            stacked = StepHooks._irregularity_at(car, t, stacked=True)
+            stacked = car._irregularity_stacked(t)
             np.testing.assert_array_equal(stacked, np.stack(want, axis=-1))

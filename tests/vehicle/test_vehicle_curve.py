@@ -371,7 +371,7 @@ def test_track_sampler_matches_the_exact_geometry(cant_rad, shape):
         above = sampler(grid)
         assert np.abs(below[5] - above[5]).max() < 1e-9  # d(cant)/ds
         assert np.abs(below[4] - above[4]).max() < 1e-11  # curvature (kappa' 1e-9 m: 1e-12)
-    # the scalar path gives the same numbers
+    # at() (tuples per point) and the call (arrays per quantity) read the same rows
     some = [0.0, 49.99, 50.0, 57.3, 65.0, 200.0, track.total_length_m]
     for si, tup in zip(some, sampler.at(some)):
         assert np.allclose(tup, [v[0] for v in sampler(np.array([si]))], rtol=0, atol=1e-12)

@@ -115,23 +115,27 @@ class StepHooks:
         if self._irr is None:
             irr = np.zeros((3, 4, 4))
         else:
-            irr = self._irregularity_at(times[:, None], stacked=True)
+            irr = self._irregularity_stacked(times[:, None])
         return _rails_from(irr, z, d)
 
-    def _irregularity_at(self, t, stacked: bool = False):
-        """(lateral, vertical, cross_level, gauge), each shaped like s = s0 + v t: (4,) under the
-        wheelsets at a time t, (n, 4) for times of shape (n, 1); ``stacked``: as one array
-        shaped like s with a last axis of 4."""
+    def _irregularity_stacked(self, t) -> np.ndarray:
+        """(lateral, vertical, cross_level, gauge) as one array shaped like s = s0 + v t with a
+        last axis of 4: (4, 4) under the wheelsets at a time t, (n, 4, 4) for times of shape
+        (n, 1)."""
         s = self._wheelset_s_m(t)
         if type(self._irr) is TrackIrregularity:  # finite by construction: no checks (a
             # subclass may redefine __call__: it takes the general path)
-            v = self._irr.stacked(s)
-            return v if stacked else tuple(np.moveaxis(v, -1, 0))
+            return self._irr.stacked(s)
         v = _four_channels(tuple(self._irr(s)), s.shape)
         if v is None or not np.isfinite(v).all():
             raise ValueError("irregularity(s) must return 4 finite arrays (lateral_m, "
                              "vertical_m, cross_level_m, gauge_m) shaped like s")
-        return np.moveaxis(v, 0, -1) if stacked else tuple(v)
+        return np.moveaxis(v, 0, -1)
+
+    def _irregularity_at(self, t) -> tuple[np.ndarray, ...]:
+        """(lateral, vertical, cross_level, gauge), each shaped like s = s0 + v t: (4,) under the
+        wheelsets at a time t, (n, 4) for times of shape (n, 1)."""
+        return tuple(np.moveaxis(self._irregularity_stacked(t), -1, 0))
 
     def _set_contact_track(self, t: float, state=None) -> None:
         """Track frames and rail offsets, with their rates, at the step end t (contact guidance).

@@ -119,31 +119,6 @@ class _Frame(NamedTuple):
     rails: tuple  # ((e, e_t) left, (e, e_t) right): lateral rail offsets and rates
 
 
-def _frame_rows(frames, rails, V, b):
-    """The frames of the wheelsets (:class:`_Frame`) packed as rows of 21 floats, (n, 21): ox,
-    oy, oz, oz_t, t (3), l (3), n (3), w (3), kappa, eL, eL_t, eR, eR_t (:func:`_unpacked` reads
-    one), from ``frames`` (n, 6): (x, y, heading, cant, curvature, d(cant)/ds) of the centre line,
-    and ``rails`` (n, 2, 4): per side (left, right) the rail's (e, de/dt, zr, dzr/dt)."""
-    out = np.empty((frames.shape[0], 21))
-    for i in range(frames.shape[0]):
-        x, y, heading, cant, curvature, cant_rate = frames[i]
-        eL, eLt, zL, zLt = rails[i, 0]
-        eR, eRt, zR, zRt = rails[i, 1]
-        cp, sp = math.cos(heading), math.sin(heading)
-        # track plane rolled by g = -cant (+ the rail height difference) about t
-        g = -cant + (zL - zR) / (2.0 * b)
-        g_t = -cant_rate * V + (zLt - zRt) / (2.0 * b)
-        cg, sg = math.cos(g), math.sin(g)
-        row = out[i]
-        row[0], row[1], row[2], row[3] = x, y, 0.5 * (zL + zR), 0.5 * (zLt + zRt)
-        row[4], row[5], row[6] = cp, sp, 0.0                      # t
-        row[7], row[8], row[9] = -sp * cg, cp * cg, sg            # l
-        row[10], row[11], row[12] = sp * sg, -cp * sg, cg         # n
-        row[13], row[14], row[15] = g_t, curvature * V * sg, curvature * V * cg  # w
-        row[16], row[17], row[18], row[19], row[20] = curvature, eL, eLt, eR, eRt
-    return out
-
-
 @jitable
 def _unpacked(row) -> _Frame:
     """The frame of a row of :func:`_frame_rows`."""
@@ -294,7 +269,30 @@ def _wheelset(ops, table, su, ref, fr, q, qt):
 _DEPENDS = (__file__, _contact_law.__file__, compiled.__file__, kernel_ops.__file__)
 
 
-_frame_rows_kernel = kernel(*_DEPENDS)(_frame_rows)
+@kernel(*_DEPENDS)
+def _frame_rows(frames, rails, V, b):
+    """The frames of the wheelsets (:class:`_Frame`) packed as rows of 21 floats, (n, 21): ox,
+    oy, oz, oz_t, t (3), l (3), n (3), w (3), kappa, eL, eL_t, eR, eR_t (:func:`_unpacked` reads
+    one), from ``frames`` (n, 6): (x, y, heading, cant, curvature, d(cant)/ds) of the centre line,
+    and ``rails`` (n, 2, 4): per side (left, right) the rail's (e, de/dt, zr, dzr/dt)."""
+    out = np.empty((frames.shape[0], 21))
+    for i in range(frames.shape[0]):
+        x, y, heading, cant, curvature, cant_rate = frames[i]
+        eL, eLt, zL, zLt = rails[i, 0]
+        eR, eRt, zR, zRt = rails[i, 1]
+        cp, sp = math.cos(heading), math.sin(heading)
+        # track plane rolled by g = -cant (+ the rail height difference) about t
+        g = -cant + (zL - zR) / (2.0 * b)
+        g_t = -cant_rate * V + (zLt - zRt) / (2.0 * b)
+        cg, sg = math.cos(g), math.sin(g)
+        row = out[i]
+        row[0], row[1], row[2], row[3] = x, y, 0.5 * (zL + zR), 0.5 * (zLt + zRt)
+        row[4], row[5], row[6] = cp, sp, 0.0                      # t
+        row[7], row[8], row[9] = -sp * cg, cp * cg, sg            # l
+        row[10], row[11], row[12] = sp * sg, -cp * sg, cg         # n
+        row[13], row[14], row[15] = g_t, curvature * V * sg, curvature * V * cg  # w
+        row[16], row[17], row[18], row[19], row[20] = curvature, eL, eLt, eR, eRt
+    return out
 
 
 @kernel(*_DEPENDS)
@@ -476,7 +474,7 @@ class WheelsetTrackContact:
         if not (frames.shape == (self.n, 6) and rails.shape == (self.n, 2, 4)):
             raise ValueError(f"need {self.n} frames of 6 values and rails of (2, 4), got "
                              f"{frames.shape} and {rails.shape}")
-        self._frame_rows = _frame_rows_kernel(frames, rails, self.V, self.b)
+        self._frame_rows = _frame_rows(frames, rails, self.V, self.b)
 
     @property
     def _frames(self) -> list[_Frame]:
@@ -516,6 +514,7 @@ class WheelsetTrackContact:
                                    wheels[:, 6:9], pose[:, 0], pose[:, 1], pose[:, 0] - pose[:, 2])
 
     def _predicted(self, q, q_t, h: float) -> tuple:
+        """The offsets kernel's arguments for the coordinates q + h q_t (q_t None: q)."""
         q = np.asarray(q, dtype=float)
         q_t = np.zeros_like(q) if q_t is None else np.asarray(q_t, dtype=float)
         if not q.shape == q_t.shape == (self.m * self.n,):  # the kernels do not check bounds
