@@ -40,10 +40,15 @@ def timed(obj, name: str, totals: dict) -> None:
     setattr(obj, name, wrapper)
 
 
-def once(scenario, k_values, seconds: float, split: bool):
+def build(scenario, k_values):
+    """The co-simulation of the ride ``scenario``'s first speed, one car per k value."""
     curve, _ = ride.curve_at(scenario.ride, scenario.ride.speeds_m_per_s[0], scenario.vehicle)
     speed_scenario = ride._speed_scenario(scenario, curve)
-    cosim = build_cosimulation(speed_scenario, k_values, ride.curve_entry.make_car)
+    return build_cosimulation(speed_scenario, k_values, ride.curve_entry.make_car)
+
+
+def once(scenario, k_values, seconds: float, split: bool):
+    cosim = build(scenario, k_values)
     totals = dict.fromkeys(STAGES, 0.0)
     if split:
         for name in STAGES:
@@ -57,17 +62,27 @@ def once(scenario, k_values, seconds: float, split: bool):
     return wall, totals, round(seconds / scenario.solver.macro_step_s)
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def ride_arguments(description: str, seconds: float) -> argparse.ArgumentParser:
+    """The options that choose a ride case (shared with ``bench_car_floor.py``)."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--k", default="10", help="k values [W/K], comma-separated (one car each, one circuit)")
     ap.add_argument("--speed", type=float, default=20.0, help="running speed [m/s]")
-    ap.add_argument("--seconds", type=float, default=30.0, help="simulated time [s]")
-    ap.add_argument("--repeat", type=int, default=3, help="runs; the median is quoted")
+    ap.add_argument("--seconds", type=float, default=seconds, help="simulated time [s]")
     ap.add_argument("--set", dest="overrides", action="append", default=[], help="a scenario override")
-    args = ap.parse_args()
-    k_values = [float(k) for k in args.k.split(",")]
+    return ap
+
+
+def ride_case(args):
+    """(scenario at ``args.speed`` lasting ``args.seconds``, k values) of parsed ride arguments."""
     overrides = [f"ride.speeds_m_per_s=[{args.speed}]", f"ride.record_s={args.seconds}", *args.overrides]
-    scenario = load_scenario(SCENARIO, overrides)
+    return load_scenario(SCENARIO, overrides), [float(k) for k in args.k.split(",")]
+
+
+def main() -> int:
+    ap = ride_arguments(__doc__.splitlines()[0], seconds=30.0)
+    ap.add_argument("--repeat", type=int, default=3, help="runs; the median is quoted")
+    args = ap.parse_args()
+    scenario, k_values = ride_case(args)
     walls, splits = [], []
     for i in range(args.repeat):
         wall, totals, steps = once(scenario, k_values, args.seconds, split=(i == 0))
