@@ -31,7 +31,15 @@ from cosim.kinds.car import (
 from cosim.kinds.comfort import comfort_columns
 from cosim.limits.assessment import STEP_M
 from cosim.limits.checks import CaseMetrics
-from cosim.limits.criteria import SLIDING_MEAN_M, nadal_limit, prudhomme_limit_N, sliding_mean, window_mean
+from cosim.limits.criteria import (
+    SLIDING_MEAN_M,
+    en14363_twist_limit,
+    largest_track_twist,
+    nadal_limit,
+    prudhomme_limit_N,
+    sliding_mean,
+    window_mean,
+)
 from cosim.results.io import Progress, read_rows
 from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection, case_series
@@ -487,6 +495,9 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
              f"transition, R = {curve.radius_m:g} m, {curve.guidance} guidance"
              f"{', irregular track' if curve.irregularity else ''}; {len(scenario.k_W_per_K)} k values x valves "
              f"{curve.valve_settings}")
+    warnings: List[str] = []
+    for message in track_twist_warnings(curve.track(), scenario.vehicle):
+        warn(warnings, message)
     ds, diagnoses = simulate(scenario, progress)
     rows, cases, statistics, assessed = [], [], [], []
     s_centre = car_centre_s_m(scenario, ds["time"].values)
@@ -518,7 +529,6 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         info.update(yq_lim=rows[0]["yq_lim"] if rows else None, sum_y_lim_N=rows[0]["sum_y_lim_N"] if rows else None)
     if curve.irregularity is not None:
         info["irregularity"] = curve.track_irregularity(scenario.vehicle).source
-    warnings: List[str] = []
     coarse = en14363.acceleration_warning(ds["time"].values)
     if coarse:
         warn(warnings, coarse)
@@ -531,6 +541,32 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
                        f"no step")
     return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, warnings, info,
                    time.perf_counter() - t0, tables={"assessment": statistics, "assessment_limits": assessed})
+
+
+#: grid of the arc length on which :func:`track_twist_warnings` looks for the largest twist [m]
+TWIST_GRID_M = 0.05
+
+
+def track_twist_warnings(track: TrackGeometry, vehicle: VehicleParams) -> List[str]:
+    """A warning for each base, the bogie's wheelbase 2a+ and the bogie centre distance 2a*, over
+    which the design cant twists the track more than EN 14363's limit track twist for that base
+    (:func:`~cosim.limits.criteria.en14363_twist_limit`, the twist of its test on twisted track: what
+    the standard asks a vehicle to negotiate): a steep cant ramp, e.g. 0.1 rad over 10 m (22 per
+    mille over a 2 m wheelbase), on which the car may unload a wheel or climb a flange because of
+    the track. The cross-level is taken over ``contact_spacing_m``."""
+    s = np.arange(0.0, track.total_length_m + TWIST_GRID_M, TWIST_GRID_M)
+    found = []
+    for name, base in (("wheelbase 2a+", vehicle.wheelbase_m), ("bogie centre distance 2a*",
+                                                                 vehicle.bogie_centre_distance_m)):
+        twist, at = largest_track_twist(track.cant_rad, np.minimum(s, track.total_length_m), base,
+                                        vehicle.contact_spacing_m)
+        limit = en14363_twist_limit(base)
+        if twist > limit:
+            found.append(f"the cant ramp twists the track by {1e3 * twist:.3g} per mille over the {name} "
+                         f"({base:g} m, ending at s = {at:.1f} m): steeper than the {1e3 * limit:g} per mille EN 14363 "
+                         f"asks a vehicle to negotiate over that base (its test on twisted track); the wheel "
+                         f"unloading there includes the ramp's own twist")
+    return found
 
 
 def ramp_roll_rate_step_rad_per_s(curve: CurveTest) -> float:

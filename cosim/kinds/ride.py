@@ -27,7 +27,7 @@ from cosim.kinds.comfort import COLUMNS, comfort_columns
 from cosim.kinds.curve_entry import MAX_SPEED_M_PER_S, CurveTest, IrregularitySpec, parse_irregularity
 from cosim.limits.checks import CaseMetrics
 from cosim.results.io import Progress, read_rows
-from cosim.results.outcome import Outcome, largest
+from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection
 from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
 from cosim.scenario.model import Scenario
@@ -159,6 +159,9 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
              f"records; {len(scenario.k_W_per_K)} k values x valves {ride.valve_settings}")
     rows, series, diagnoses, cases = [], {}, [], []
     runs = [curve_at(ride, v, scenario.vehicle) for v in ride.speeds_m_per_s]
+    warnings: List[str] = []
+    for message in curve_entry.track_twist_warnings(runs[0][0].track(), scenario.vehicle):  # the same ramp at every speed
+        warn(warnings, message)
     # all speeds on one pool: a speed's k values share a process and a circuit where the processes allow
     results = curve_entry.simulate_many([_speed_scenario(scenario, curve) for curve, _ in runs], progress,
                                         [f"{scenario.name} {v:g} m/s" for v in ride.speeds_m_per_s])
@@ -178,7 +181,6 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
              "Cc_y_max_centre_m_per_s2", "Cc_z_max_centre_m_per_s2", "roll_max_rad", "air_injected_kg")
     info = {"record_s": ride.record_s, "speeds_m_per_s": list(ride.speeds_m_per_s),
             "irregularity": None if ride.irregularity is None else ride.irregularity.psd or ride.irregularity.file}
-    warnings = []
     if ride.record_s < 300.0:
         warnings.append(f"records of {ride.record_s:g} s: EN 12299 evaluates N_MV over 300 s; the percentiles rest on "
                         f"{int(ride.record_s // 5)} blocks")

@@ -25,7 +25,7 @@ from cosim.kinds.car import (
     simulate_cases,
 )
 from cosim.limits.checks import CaseMetrics
-from cosim.limits.criteria import DQQ_LIMIT, static_wheel_loads, wheel_unloading, window_drift, window_mean
+from cosim.limits.criteria import DQQ_LIMIT, en14363_twist_limit, static_wheel_loads, wheel_unloading, window_drift, window_mean
 from cosim.results.io import Progress
 from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection, case_series, worst_wheels
@@ -45,15 +45,6 @@ MAX_TWIST_PER_MILLE = 21.0
 #: (100 per mille over a 10 m base: 1 m).
 MAX_RAIL_LIFT_M = 0.2
 _TWIST = Range(0.0, MAX_TWIST_PER_MILLE, unit="per mille", why="3 x the largest EN 14363 limit; 0: untwisted reference")
-
-
-def en14363_twist_limit(base_m: float) -> float:
-    """Track twist [-] for a base 2a [m]: 7e-3 (2a <= 4 m), (20/2a + 2)e-3 (<= 20 m), 3e-3 above."""
-    if base_m <= 4.0:
-        return 7e-3
-    if base_m <= 20.0:
-        return (20.0 / base_m + 2.0) * 1e-3
-    return 3e-3
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,29 @@ def wheel_unloading(Q_N: np.ndarray, Q0_N: np.ndarray) -> np.ndarray:
     return (Q0_N - Q_N) / Q0_N
 
 
+def en14363_twist_limit(base_m: float) -> float:
+    """Track twist [-] for a base 2a [m]: 7e-3 (2a <= 4 m), (20/2a + 2)e-3 (<= 20 m), 3e-3 above
+    (the limit EN 14363's test on twisted track applies, as commonly quoted from it)."""
+    if base_m <= 4.0:
+        return 7e-3
+    if base_m <= 20.0:
+        return (20.0 / base_m + 2.0) * 1e-3
+    return 3e-3
+
+
+def largest_track_twist(cant_rad, s_m, base_m: float, rail_base_m: float) -> tuple[float, float]:
+    """The largest track twist [-] over a base of ``base_m`` [m] and where it ends [m]: the change
+    of cross-level, ``rail_base_m`` sin(cant), from s - base to s, over the base (EN 14363's twist
+    g = Δh / 2a), for ``cant_rad``, a function of the arc length [rad], on the grid ``s_m`` (the
+    points before the track's start see the track's first cant). (0, s_m[0]) without twist."""
+    s = np.asarray(s_m, dtype=float)
+    height = rail_base_m * np.sin(np.asarray(cant_rad(s), dtype=float))
+    behind = rail_base_m * np.sin(np.asarray(cant_rad(np.maximum(s - base_m, s[0])), dtype=float))
+    twist = np.abs(height - behind) / base_m
+    i = int(np.argmax(twist))
+    return float(twist[i]), float(s[i])
+
+
 #: EN 14363: Y/Q and ΣY are assessed on their sliding mean over 2 m of track
 SLIDING_MEAN_M = 2.0
 

@@ -88,6 +88,55 @@ def test_air_outside_physics_stops_its_case_only():
 
 
 # ---------------------------------------------------------------------------- flexible track
+from cosim.kinds.curve_entry import track_twist_warnings  # noqa: E402
+from cosim.limits.criteria import largest_track_twist  # noqa: E402
+from vehicle.params import VehicleParams as _Params  # noqa: E402
+from vehicle.track import TrackGeometry  # noqa: E402
+
+RAIL_BASE_M = 1.5
+
+
+def _ramp(shape: str, cant: float = 0.1, length: float = 30.0) -> TrackGeometry:
+    return TrackGeometry.curve_entry(20.0, length, 300.0, 50.0, cant_rad=cant, transition_shape=shape)
+
+
+def test_a_linear_ramps_largest_twist_is_its_first_base():
+    """Linear ramp c s / L: the cross-level 1.5 sin(c s / L) rises fastest where the cant is
+    smallest, so the largest twist over a base b is the first window, 1.5 sin(c b / L) / b, ending
+    b after the ramp's start (s = 22 m, a grid point): exact up to rounding."""
+    for b in (2.0, 10.0):
+        twist, at = largest_track_twist(_ramp("linear").cant_rad, np.arange(0.0, 100.0, 0.05), b, RAIL_BASE_M)
+        assert twist == pytest.approx(RAIL_BASE_M * math.sin(0.1 * b / 30.0) / b, rel=1e-12)
+        assert at == pytest.approx(20.0 + b)
+
+
+def test_a_bloss_ramps_largest_twist_is_across_its_middle():
+    """Bloss 3 x^2 - 2 x^3 is symmetric about its middle (f(1 - x) = 1 - f(x)); over the window of
+    relative length beta = b / L centred there the ramp rises by df = beta (1.5 - beta^2 / 2) (the mean
+    of f' = 1.5 - 6 t^2), so the cross-level by 2 cos(c / 2) sin(c df / 2) x 1.5 exactly. The
+    largest window sits a little before the middle (the sine flattens the upper half) and the grid is
+    0.05 m: both move the maximum by ~2e-6 of itself (against a 0.1 mm grid), hence 1e-5."""
+    c, L, b = 0.1, 30.0, 2.0
+    beta = b / L
+    df = beta * (1.5 - beta ** 2 / 2.0)
+    expected = 2.0 * math.cos(c / 2.0) * math.sin(c * df / 2.0) * RAIL_BASE_M / b
+    twist, at = largest_track_twist(_ramp("bloss").cant_rad, np.arange(0.0, 100.0, 0.05), b, RAIL_BASE_M)
+    assert twist == pytest.approx(expected, rel=1e-5)
+    assert at == pytest.approx(20.0 + L / 2.0 + b / 2.0, abs=0.1)
+
+
+def test_a_ramp_steeper_than_en14363s_twist_is_said_and_a_gentle_one_is_not():
+    """0.1 rad over 10 m (Bloss): 22 per mille over the 2 m wheelbase (7 allowed) and 15 over the
+    10 m bogie centre distance (4 allowed), one warning each; 0.1 rad over 60 m linear (2.5 per
+    mille) and straight track raise none."""
+    p = _Params()
+    steep = track_twist_warnings(_ramp("bloss", length=10.0), p)
+    assert len(steep) == 2
+    assert "22.2 per mille over the wheelbase 2a+ (2 m" in steep[0] and "the 7 per mille EN 14363" in steep[0]
+    assert "15 per mille over the bogie centre distance 2a* (10 m" in steep[1] and "the 4 per mille" in steep[1]
+    assert track_twist_warnings(_ramp("linear", length=60.0), p) == []
+    assert track_twist_warnings(_ramp("bloss", cant=0.0), p) == []
+
 from vehicle.car import MetroCar  # noqa: E402 (exudyn: after the pure tests)
 from vehicle.params import VehicleParams, slab_track  # noqa: E402
 
