@@ -36,8 +36,11 @@ def en14363_twist_limit(base_m: float) -> float:
 def largest_track_twist(cant_rad, s_m, base_m: float, rail_base_m: float) -> tuple[float, float]:
     """The largest track twist [-] over a base of ``base_m`` [m] and where it ends [m]: the change
     of cross-level, ``rail_base_m`` sin(cant), from s - base to s, over the base (EN 14363's twist
-    g = Δh / 2a), for ``cant_rad``, a function of the arc length [rad], on the grid ``s_m`` (the
-    points before the track's start see the track's first cant). (0, s_m[0]) without twist."""
+    g = Δh / 2a), for ``cant_rad``, a function of the arc length [rad], on the grid ``s_m``
+    (ascending; a window reaching back before the grid's first point takes that point's cant,
+    the level track before a curve when the grid starts at the track's start). Either sense
+    counts: a ramp up into a curve to the left or right, or down out of it. (0, s_m[0]) without
+    twist."""
     s = np.asarray(s_m, dtype=float)
     height = rail_base_m * np.sin(np.asarray(cant_rad(s), dtype=float))
     behind = rail_base_m * np.sin(np.asarray(cant_rad(np.maximum(s - base_m, s[0])), dtype=float))

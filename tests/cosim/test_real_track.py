@@ -125,6 +125,21 @@ def test_a_bloss_ramps_largest_twist_is_across_its_middle():
     assert at == pytest.approx(20.0 + L / 2.0 + b / 2.0, abs=0.1)
 
 
+def test_the_twist_counts_in_either_sense():
+    """A curve to the right (cant of the other sign) and the ramp down out of a curve twist the
+    track as much as the ramp into a curve to the left (the linear ramp's first window, above)."""
+    from vehicle.track import Arc, Straight, Transition
+    expected = RAIL_BASE_M * math.sin(0.1 * 2.0 / 30.0) / 2.0
+    right = TrackGeometry.curve_entry(20.0, 30.0, 300.0, 50.0, cant_rad=0.1, transition_shape="linear", direction=-1)
+    exit_only = TrackGeometry((Arc(300.0, 20.0, cant_rad=0.1), Transition(30.0, "linear"), Straight(40.0)))
+    for track in (right, exit_only):
+        twist, _ = largest_track_twist(track.cant_rad, np.arange(0.0, track.total_length_m, 0.05), 2.0, RAIL_BASE_M)
+        assert twist == pytest.approx(expected, rel=1e-12)
+    assert len(track_twist_warnings(_ramp("bloss", length=10.0), _Params())) == \
+        len(track_twist_warnings(TrackGeometry.curve_entry(20.0, 10.0, 300.0, 50.0, cant_rad=0.1, direction=-1),
+                                 _Params())) == 2
+
+
 def test_a_ramp_steeper_than_en14363s_twist_is_said_and_a_gentle_one_is_not():
     """0.1 rad over 10 m (Bloss): 22 per mille over the 2 m wheelbase (7 allowed) and 15 over the
     10 m bogie centre distance (4 allowed), one warning each; 0.1 rad over 60 m linear (2.5 per
