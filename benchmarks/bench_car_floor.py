@@ -84,7 +84,7 @@ def main() -> int:
     scenario, k_values = ride_case(args)
     cosim = build(scenario, k_values)
     totals = dict.fromkeys(("contact", "contact_calls", "advance"), 0.0)
-    cars = [getattr(c, "car", c) for c in cosim.cars]
+    cars = cosim.cars
     for car in cars:
         instrument(car, totals)
     t0 = time.perf_counter()

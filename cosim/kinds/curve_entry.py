@@ -495,13 +495,13 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
              f"transition, R = {curve.radius_m:g} m, {curve.guidance} guidance"
              f"{', irregular track' if curve.irregularity else ''}; {len(scenario.k_W_per_K)} k values x valves "
              f"{curve.valve_settings}")
-    warnings: List[str] = []
-    for message in track_twist_warnings(curve.track(), scenario.vehicle):
+    track, warnings = curve.track(), []
+    for message in track_twist_warnings(track, scenario.vehicle):
         warn(warnings, message)
     ds, diagnoses = simulate(scenario, progress)
     rows, cases, statistics, assessed = [], [], [], []
     s_centre = car_centre_s_m(scenario, ds["time"].values)
-    track, yq_lim = curve.track(), nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction)
+    yq_lim = nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction)
     for j in range(ds.sizes["case"]):
         case = ds.isel(case=j)
         row = summary_row(case, curve)
@@ -554,12 +554,11 @@ def track_twist_warnings(track: TrackGeometry, vehicle: VehicleParams) -> List[s
     the standard asks a vehicle to negotiate): a steep cant ramp, e.g. 0.1 rad over 10 m (22 per
     mille over a 2 m wheelbase), on which the car may unload a wheel or climb a flange because of
     the track. The cross-level is taken over ``contact_spacing_m``."""
-    s = np.arange(0.0, track.total_length_m + TWIST_GRID_M, TWIST_GRID_M)
+    s = np.append(np.arange(0.0, track.total_length_m, TWIST_GRID_M), track.total_length_m)
     found = []
     for name, base in (("wheelbase 2a+", vehicle.wheelbase_m), ("bogie centre distance 2a*",
                                                                  vehicle.bogie_centre_distance_m)):
-        twist, at = largest_track_twist(track.cant_rad, np.minimum(s, track.total_length_m), base,
-                                        vehicle.contact_spacing_m)
+        twist, at = largest_track_twist(track.cant_rad, s, base, vehicle.contact_spacing_m)
         limit = en14363_twist_limit(base)
         if twist > limit:
             found.append(f"the cant ramp twists the track by {1e3 * twist:.3g} per mille over the {name} "

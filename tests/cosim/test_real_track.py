@@ -141,14 +141,21 @@ def test_the_twist_counts_in_either_sense():
 
 
 def test_a_ramp_steeper_than_en14363s_twist_is_said_and_a_gentle_one_is_not():
-    """0.1 rad over 10 m (Bloss): 22 per mille over the 2 m wheelbase (7 allowed) and 15 over the
-    10 m bogie centre distance (4 allowed), one warning each; 0.1 rad over 60 m linear (2.5 per
-    mille) and straight track raise none."""
+    """0.1 rad over 10 m (Bloss): over the 2 m wheelbase the closed form above (beta = 0.2), 22 per
+    mille (7 allowed); over the 10 m bogie centre distance the whole ramp, 1.5 sin(0.1) / 10 = 15
+    per mille (4 allowed): one warning each. 0.1 rad over 60 m linear (2.5 per mille) and straight
+    track raise none."""
     p = _Params()
+    beta = 2.0 / 10.0
+    df = beta * (1.5 - beta ** 2 / 2.0)
+    over_wheelbase = 2.0 * math.cos(0.05) * math.sin(0.1 * df / 2.0) * RAIL_BASE_M / 2.0
+    over_bogies = RAIL_BASE_M * math.sin(0.1) / 10.0
     steep = track_twist_warnings(_ramp("bloss", length=10.0), p)
     assert len(steep) == 2
-    assert "22.2 per mille over the wheelbase 2a+ (2 m" in steep[0] and "the 7 per mille EN 14363" in steep[0]
-    assert "15 per mille over the bogie centre distance 2a* (10 m" in steep[1] and "the 4 per mille" in steep[1]
+    assert f"{1e3 * over_wheelbase:.3g} per mille over the wheelbase 2a+ (2 m" in steep[0]
+    assert "the 7 per mille EN 14363" in steep[0]
+    assert f"{1e3 * over_bogies:.3g} per mille over the bogie centre distance 2a* (10 m" in steep[1]
+    assert "the 4 per mille" in steep[1]
     assert track_twist_warnings(_ramp("linear", length=60.0), p) == []
     assert track_twist_warnings(_ramp("bloss", cant=0.0), p) == []
 
