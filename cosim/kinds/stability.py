@@ -27,7 +27,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -35,7 +35,7 @@ from cosim.errors import ScenarioError
 from cosim.kinds.base import Kind
 from cosim.limits.checks import CaseMetrics
 from cosim.results.io import Progress, atomic_write
-from cosim.results.outcome import Outcome
+from cosim.results.outcome import Outcome, warn
 from cosim.results.plots import Curve, Figure, Panel, k_legend
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import Range, build, check_valve_settings, positive
@@ -171,6 +171,10 @@ def extra_files(test: StabilityTest) -> Tuple[Path, ...]:
 
 
 def refuse_check(metric: str, test: StabilityTest) -> Optional[str]:
+    if metric == "nonlinear_critical_speed_m_per_s" and not test.nonlinear_speeds_m_per_s \
+            and test.ramp_from_m_per_s is None:
+        return ("the scenario runs no time-domain analysis: give stability.ramp_from_m_per_s (a ramp-down) or "
+                "stability.nonlinear_speeds_m_per_s (brute force)")
     return None
 
 
@@ -178,7 +182,7 @@ def refuse_limit(metric: str, op: str, limit: float, test: StabilityTest) -> Opt
     """A lower limit on the critical speed above the scan's last speed cannot be shown (a car stable
     over the whole scan reports inf, which would pass it)."""
     last = max(*test.speeds_m_per_s, test.reference_speed)
-    if metric == "critical_speed_m_per_s" and op in (">=", ">") and limit > last:
+    if metric.endswith("critical_speed_m_per_s") and op in (">=", ">") and limit > last:
         return (f"the scan ends at {last:g} m/s (stability.speeds_m_per_s): a critical speed above it cannot be "
                 f"shown; extend the speeds to {limit:g} m/s or beyond")
     return None
@@ -347,25 +351,34 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     if test.nonlinear_speeds_m_per_s:
         tables["nonlinear"], diagnoses = _brute_force(scenario, progress)
         _add_onsets(rows, tables["nonlinear"])
-    cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, math.nan) for m in KIND.check_metrics})
-             for r in rows if r["airspring"] == "circuit"]
-    circuit_rows = [r for r in rows if r["airspring"] == "circuit"]
-    metrics = {m: float(np.min([r[m] for r in circuit_rows]))            # NaN when one case has none
-               for m in ("critical_speed_m_per_s", "min_damping_ratio")}
-    info = {"contact_table": contact.table_csv or "S1002 / UIC60 1:40 (shipped)",
-            "conicity_at_centre": _centre_conicity(probe),
-            "equivalent_conicity_3mm": float(table.equivalent_conicity(0.003)),
-            "speeds_m_per_s": speeds}
-    shown = ("valves", "k_W_per_K", "airspring", "critical_speed_m_per_s", "critical_mode", "critical_frequency_Hz",
-             "min_damping_ratio", "f_lower_sway_Hz", "zeta_lower_sway", "f_yaw_Hz", "zeta_yaw")
+    warnings: List[str] = []
     if test.ramp_from_m_per_s is not None:
         tables["ramp"], tables["ramp_envelope"], found = _ramp_down(scenario, progress)
         diagnoses += found
         _add_ramp_ends(rows, tables["ramp"])
-        shown += ("limit_cycle_ends_m_per_s",)
+    for row in rows:
+        row.update(verdict_columns(row, tables.get("nonlinear", ())))
+    if not test.nonlinear_speeds_m_per_s and test.ramp_from_m_per_s is None:
+        warn(warnings, LINEAR_ONLY_WARNING)
+    cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, math.nan) for m in KIND.check_metrics})
+             for r in rows if r["airspring"] == "circuit"]
+    circuit_rows = [r for r in rows if r["airspring"] == "circuit"]
+    metrics = {m: float(np.min([r[m] for r in circuit_rows]))            # NaN when one case has none
+               for m in KIND.check_metrics if circuit_rows and m in circuit_rows[0]}
+    info = {"contact_table": contact.table_csv or "S1002 / UIC60 1:40 (shipped)",
+            "conicity_at_centre": _centre_conicity(probe),
+            "equivalent_conicity_3mm": float(table.equivalent_conicity(0.003)),
+            "speeds_m_per_s": speeds}
+    shown = ("valves", "k_W_per_K", "airspring", "critical_speed_m_per_s", "critical_speed_by",
+             "linear_critical_speed_m_per_s", "critical_mode", "critical_frequency_Hz", "min_damping_ratio",
+             "f_lower_sway_Hz", "zeta_lower_sway", "f_yaw_Hz", "zeta_yaw")
+    if test.nonlinear_speeds_m_per_s or test.ramp_from_m_per_s is not None:
+        shown += ("nonlinear_critical_speed_m_per_s",)
     if test.nonlinear_speeds_m_per_s:
         shown += ("nonlinear_onset_m_per_s",)
-    return Outcome(scenario, rows, shown, {}, metrics, cases, diagnoses, [], info, time.perf_counter() - t0,
+    if test.ramp_from_m_per_s is not None:
+        shown += ("limit_cycle_ends_m_per_s",)
+    return Outcome(scenario, rows, shown, {}, metrics, cases, diagnoses, warnings, info, time.perf_counter() - t0,
                    tables=tables)
 
 
@@ -470,6 +483,50 @@ def _add_onsets(rows: List[Dict[str, object]], runs: List[Dict[str, object]]) ->
         row["nonlinear_note"] = note
 
 
+#: said by a run without a time-domain analysis (its critical speed is the linear one alone)
+LINEAR_ONLY_WARNING = ("the critical speed is the linear one only (no stability.nonlinear_speeds_m_per_s or "
+                       "stability.ramp_from_m_per_s): where the bifurcation is subcritical, as on S1002 / UIC60, "
+                       "the car keeps hunting below it (docs/stability.md: the car with dampers to 28.3 m/s "
+                       "against 40.3 m/s linear); add a ramp-down or brute force to assess it")
+
+
+def verdict_columns(row: Dict[str, object], brute_force: Sequence[Dict[str, object]] = ()) -> Dict[str, object]:
+    """The running-stability verdict of a summary row: ``critical_speed_m_per_s``, the lowest speed
+    at which the car is shown to hunt by any analysis the row ran, and ``critical_speed_by``, which
+    one. The linear critical speed (``linear_critical_speed_m_per_s``) is the verdict only without a
+    time-domain analysis; a subcritical car hunts below it on a limit cycle. The time-domain one
+    (``nonlinear_critical_speed_m_per_s``) is the lowest of: the brute-force onset (smallest
+    disturbance), the lowest brute-force speed at which any disturbance hunts, and the speed where
+    the ramp-down's limit cycle died. A ramp-down whose limit cycle never died hunts down to its
+    last speed at least: the critical speed lies below the ramp, unknown (NaN, and a lower limit
+    on it fails). Rows without a time-domain analysis (the static-stiffness ones) keep the linear
+    verdict."""
+    linear = float(row["linear_critical_speed_m_per_s"])
+    found = {}
+    if "nonlinear_onset_m_per_s" in row:
+        hunting = [float(r["speed_m_per_s"]) for r in brute_force
+                   if r["hunts"] and r["k_W_per_K"] == row["k_W_per_K"] and r["valves"] == row["valves"]]
+        found["brute force"] = min((v for v in (row["nonlinear_onset_m_per_s"], *hunting) if not math.isnan(v)),
+                                   default=math.nan)
+    if "limit_cycle_ends_m_per_s" in row:
+        found["ramp-down"] = float(row["limit_cycle_ends_m_per_s"])
+        if math.isnan(found["ramp-down"]):
+            return {"linear_critical_speed_m_per_s": linear, "nonlinear_critical_speed_m_per_s": math.nan,
+                    "critical_speed_m_per_s": math.nan,
+                    "critical_speed_by": "ramp-down: the limit cycle did not die (below the ramp's end)"}
+    known = {by: v for by, v in found.items() if not math.isnan(v)}
+    nonlinear = min(known.values()) if known else math.nan
+    out = {"linear_critical_speed_m_per_s": linear}
+    if found:
+        out["nonlinear_critical_speed_m_per_s"] = nonlinear
+    if known and not nonlinear >= linear:          # the time domain shows hunting below the linear speed
+        by = min(known, key=known.get)
+        out.update(critical_speed_m_per_s=nonlinear, critical_speed_by=by)
+    else:
+        out.update(critical_speed_m_per_s=linear, critical_speed_by="linear")
+    return out
+
+
 def _centre_conicity(car) -> float:
     """d(r_L - r_R)/dy / 2 of the contact law's (smoothed) table at y = 0, over +-0.01 mm: the
     conicity the linearisation about the centred wheelset sees."""
@@ -487,10 +544,10 @@ def _critical_columns(cars, air, scan, v_crit, bracket, note) -> Dict[str, objec
     lowest = min((m.damping_ratio for ms in scan.modes for m in ms), default=math.nan)
     out = {"min_damping_ratio": lowest, "critical_note": note}
     if v_crit is None and not math.isnan(bracket[0]):
-        out.update(critical_speed_m_per_s=math.inf, critical_mode="", critical_frequency_Hz=math.nan)
+        out.update(linear_critical_speed_m_per_s=math.inf, critical_mode="", critical_frequency_Hz=math.nan)
         return out
     m = least_damped(modes_at(cars, air, bracket[1]))
-    out.update(critical_speed_m_per_s=math.nan if v_crit is None else v_crit, critical_mode=m.label,
+    out.update(linear_critical_speed_m_per_s=math.nan if v_crit is None else v_crit, critical_mode=m.label,
                critical_frequency_Hz=m.frequency_Hz)
     return out
 
@@ -561,8 +618,8 @@ def _bifurcation_figures(outcome: Outcome) -> List[Figure]:
             amplitude.append(trace)
         top = max([1e3 * r["final_amplitude_m"] for r in mine] + [max(c.y) for c in amplitude if len(c.y)], default=1.0)
         for row in outcome.rows:
-            if row["valves"] == valves and row["airspring"] == "circuit" and math.isfinite(row["critical_speed_m_per_s"]):
-                v = row["critical_speed_m_per_s"]
+            if row["valves"] == valves and row["airspring"] == "circuit" and math.isfinite(row["linear_critical_speed_m_per_s"]):
+                v = row["linear_critical_speed_m_per_s"]
                 amplitude.append(Curve([v, v], [0.0, top], f"linear critical speed, {k_legend(row['k_W_per_K'])}", ":"))
         panels = [Panel(amplitude, "speed V [m/s]", "leading wheelset amplitude [mm]",
                         "bifurcation diagram: brute force (last second), ramp-down (largest over the next second)")]
@@ -575,9 +632,11 @@ def _bifurcation_figures(outcome: Outcome) -> List[Figure]:
 
 
 KIND = Kind("stability", "stability", StabilityTest, __name__, car=True,
-            check_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
+            check_metrics=("critical_speed_m_per_s", "linear_critical_speed_m_per_s",
+                           "nonlinear_critical_speed_m_per_s", "min_damping_ratio"),
             # the time-domain results move with the steps: verify estimates them too
-            headline_metrics=("critical_speed_m_per_s", "min_damping_ratio", "nonlinear_onset_m_per_s",
+            headline_metrics=("critical_speed_m_per_s", "linear_critical_speed_m_per_s",
+                              "nonlinear_critical_speed_m_per_s", "min_damping_ratio", "nonlinear_onset_m_per_s",
                               "limit_cycle_ends_m_per_s"),
             plot_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
             case_columns=("airspring", "valves", "k_W_per_K"))

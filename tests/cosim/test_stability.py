@@ -280,12 +280,58 @@ def test_ramp_down_follows_the_limit_cycle_below_the_linear_critical_speed(tmp_p
             "solver": {"jobs": 2}}
     out = run(load_scenario(write_scenario(tmp_path, data)))
     ramps = {r["deceleration_m_per_s2"]: r for r in out.tables["ramp"]}
-    v_lin = next(r for r in out.rows if r["airspring"] == "circuit")["critical_speed_m_per_s"]
+    circuit = next(r for r in out.rows if r["airspring"] == "circuit")
+    v_lin = circuit["linear_critical_speed_m_per_s"]
     assert all(r["limit_cycle_amplitude_m"] > 1e-3 for r in ramps.values())
     fast, slow = ramps[1.0]["limit_cycle_ends_m_per_s"], ramps[0.5]["limit_cycle_ends_m_per_s"]
     assert fast < slow < v_lin - 5.0
     assert abs(fast / slow - 1.0) < 0.05
     assert out.rows[0]["limit_cycle_ends_m_per_s"] == slow
+    # the verdict is the lower of the two, named: the linear speed passes a car that hunts far below it
+    assert circuit["critical_speed_m_per_s"] == slow and circuit["critical_speed_by"] == "ramp-down"
+    assert out.metrics["critical_speed_m_per_s"] == slow < out.metrics["linear_critical_speed_m_per_s"]
+
+
+def test_the_verdict_is_the_lowest_speed_any_analysis_shows_hunting():
+    """verdict_columns on rows whose answers follow from its definition: linear alone; a ramp-down
+    and a brute force below the linear speed (the lowest decides, named); a brute force whose larger
+    disturbance hunts below the smallest one's onset; a time domain above the linear speed (the
+    linear decides); a limit cycle that never died (unknown: NaN, so a lower limit fails); a brute
+    force that found no hunting (the linear decides)."""
+    from cosim.kinds.stability import verdict_columns
+    base = {"valves": False, "k_W_per_K": 10.0, "linear_critical_speed_m_per_s": 40.3}
+    assert verdict_columns(base) == {"linear_critical_speed_m_per_s": 40.3, "critical_speed_m_per_s": 40.3,
+                                     "critical_speed_by": "linear"}
+    both = verdict_columns({**base, "nonlinear_onset_m_per_s": 28.5, "limit_cycle_ends_m_per_s": 28.26})
+    assert (both["critical_speed_m_per_s"], both["critical_speed_by"]) == (28.26, "ramp-down")
+    assert both["nonlinear_critical_speed_m_per_s"] == 28.26
+    runs = [{"valves": False, "k_W_per_K": 10.0, "speed_m_per_s": v, "hunts": h, "disturbance_m": d}
+            for v, h, d in ((24.0, False, 5e-4), (30.0, True, 5e-4), (27.0, True, 3e-3))]
+    runs.append({**runs[2], "k_W_per_K": 0.0, "speed_m_per_s": 20.0})     # another case's run: not this row's
+    brute = verdict_columns({**base, "nonlinear_onset_m_per_s": 28.5}, runs)
+    assert (brute["critical_speed_m_per_s"], brute["critical_speed_by"]) == (27.0, "brute force")
+    above = verdict_columns({**base, "nonlinear_onset_m_per_s": 41.0, "limit_cycle_ends_m_per_s": 40.9})
+    assert (above["critical_speed_m_per_s"], above["critical_speed_by"]) == (40.3, "linear")
+    never = verdict_columns({**base, "limit_cycle_ends_m_per_s": math.nan})
+    assert math.isnan(never["critical_speed_m_per_s"]) and "did not die" in never["critical_speed_by"]
+    quiet = verdict_columns({**base, "nonlinear_onset_m_per_s": math.nan}, runs[:1])
+    assert (quiet["critical_speed_m_per_s"], quiet["critical_speed_by"]) == (40.3, "linear")
+    assert math.isnan(quiet["nonlinear_critical_speed_m_per_s"])
+
+
+def test_a_linear_only_run_says_so_and_refuses_a_nonlinear_check(tmp_path):
+    """Without a time-domain analysis the run warns that its critical speed is the linear one, and a
+    check on the nonlinear critical speed is refused at load, naming the keys that would run one."""
+    data = yaml.safe_load((SCENARIOS / "stability.yaml").read_text())
+    data["checks"] = ["nonlinear_critical_speed_m_per_s >= 20"]
+    with pytest.raises(ScenarioError, match=r"ramp_from_m_per_s"):
+        load_scenario(write_scenario(tmp_path, data))
+    from cosim.kinds.stability import LINEAR_ONLY_WARNING
+    data["stability"].update(speeds_m_per_s=[30.0, 50.0], resolution_m_per_s=2.0)
+    data["k_W_per_K"], data["checks"] = [0], ["linear_critical_speed_m_per_s >= 33.3"]
+    out = run(load_scenario(write_scenario(tmp_path, data)))
+    assert out.warnings == [LINEAR_ONLY_WARNING]
+    assert all(r["critical_speed_by"] == "linear" for r in out.rows) and out.checks_hold()
 
 
 def test_growth_rate_envelope_and_onset_from_synthetic_records():
