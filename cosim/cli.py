@@ -176,7 +176,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = build_parser().parse_args(argv)
-    _show_warnings()
+    _show_warnings(quiet=getattr(args, "quiet", False))
     try:
         if args.command == "compare":
             from cosim.kinds import overlays
@@ -226,13 +226,15 @@ class _Stderr(logging.Handler):
         print(f"{record.levelname.lower()}: {record.getMessage()}", file=sys.stderr, flush=True)
 
 
-def _show_warnings() -> None:
-    """Warnings about results (validity, settling) are not progress: --quiet does not hide them."""
+def _show_warnings(quiet: bool = False) -> None:
+    """Warnings about results (validity, settling) on stderr, each once; none with --quiet (they
+    stay in run.json and check.json)."""
     log = logging.getLogger("pneumorail")
-    if not any(isinstance(h, _Stderr) for h in log.handlers):
-        log.addHandler(_Stderr())
-        log.setLevel(logging.WARNING)
-        log.propagate = False
+    for handler in [h for h in log.handlers if isinstance(h, (_Stderr, logging.NullHandler))]:
+        log.removeHandler(handler)
+    log.addHandler(logging.NullHandler() if quiet else _Stderr())   # NullHandler: not logging's last resort
+    log.setLevel(logging.WARNING)
+    log.propagate = False
 
 
 def _sweep_spec(args, path: Path):

@@ -182,8 +182,8 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     info = {"record_s": ride.record_s, "speeds_m_per_s": list(ride.speeds_m_per_s),
             "irregularity": None if ride.irregularity is None else ride.irregularity.psd or ride.irregularity.file}
     if ride.record_s < 300.0:
-        warnings.append(f"records of {ride.record_s:g} s: EN 12299 evaluates N_MV over 300 s; the percentiles rest on "
-                        f"{int(ride.record_s // 5)} blocks")
+        warn(warnings, f"records of {ride.record_s:g} s: EN 12299 evaluates N_MV over 300 s; the percentiles rest on "
+                       f"{int(ride.record_s // 5)} blocks")
     return Outcome(scenario, rows, shown, series, metrics, cases, diagnoses, warnings, info, time.perf_counter() - t0)
 
 

@@ -12,8 +12,8 @@ from cosim.limits.validity import failures
 from cosim.scenario.checks import Check
 from cosim.scenario.model import Scenario
 
-#: warnings about results (validity, settling) go here, not through the progress lines: --quiet
-#: silences progress only
+#: warnings about results (validity, settling) go here, not through the progress lines; the CLI
+#: prints them on stderr unless --quiet (they stay in run.json and check.json)
 LOG = logging.getLogger("pneumorail")
 
 

@@ -129,3 +129,29 @@ def test_an_explicit_circuits_valve_label_is_what_it_contains(tmp_path):
     from cosim.load import load_scenario
     s = load_scenario(SCENARIOS / "twist_throttled_tanks.yaml")
     assert s.circuit.valves is False and s.twist.valve_settings == (False,)
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_every_warning_of_a_run_is_printed_once_and_kept(tmp_path, capsys, monkeypatch, quiet):
+    """One path for warnings, whatever the kind: one the kind only kept (as the ride's short record
+    was) and one it logged as it went are each printed once on stderr, none with --quiet, and both
+    are in run.json either way."""
+    from cosim.kinds import KINDS
+    from cosim.results.outcome import warn
+    module = KINDS["rig_table2"].code
+    original = module.run
+
+    def run_with_warnings(scenario, progress):
+        outcome = original(scenario, progress)
+        outcome.warnings.append("kept only")
+        warn(outcome.warnings, "kept and logged")
+        return outcome
+
+    monkeypatch.setattr(module, "run", run_with_warnings)
+    out = tmp_path / "out"
+    argv = ["run", str(SCENARIOS / "rig_table2.yaml"), "--out", str(out)] + (["--quiet"] if quiet else [])
+    assert cli.main(argv) == cli.EXIT_OK
+    err = capsys.readouterr().err
+    for message in ("kept only", "kept and logged"):
+        assert err.count(f"warning: {message}") == (0 if quiet else 1), err
+        assert message in json.loads((out / "run.json").read_text())["warnings"]
