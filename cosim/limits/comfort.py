@@ -1,35 +1,61 @@
 """Ride comfort from floor accelerations, simulated or measured: EN 12299's mean comfort index
 N_MV and continuous comfort Cc, ISO 2631-1's overall weighted rms, Sperling's ride index Wz.
 
-Sources (the standards' texts were not available here; the values are those the standards are
-quoted with in the literature and in comfpy, and each is marked where it is used):
+Sources. None of the standards' own texts could be read here (EN 12299:2009, ISO 2631-1:1997,
+ISO 2631-4:2001, ISO 8041); every value below names the secondary source it was read in.
 
-* **Frequency weightings** (EN 12299:2009 Annex A, ISO 2631-1:1997 Annex A, ISO 2631-4): products
-  of a band limit, an acceleration-velocity transition and an upward step,
+* **Frequency weightings**: the cascade of ISO 8041 Table 3,
 
-      H(s) = Hh(s) Hl(s) Ht(s) Hs(s),
-      Hh = s² / (s² + ω1 s / Q1 + ω1²),        Hl = ω2² / (s² + ω2 s / Q1 + ω2²),  Q1 = 1/√2,
+      H(s) = K Hh(s) Hl(s) Ht(s) Hs(s),
+      Hh = s² / (s² + ω1 s / Q1 + ω1²),   Hl = ω2² / (s² + ω2 s / Q2 + ω2²),   Q1 = Q2 = 1/√2,
       Ht = (1 + s/ω3) / (1 + s/(Q4 ω4) + s²/ω4²),
-      Hs = K (1 + s/(Q5 ω5) + s²/ω5²) / (1 + s/(Q6 ω6) + s²/ω6²),
+      Hs = (s² + ω5 s/Q5 + ω5²) / (s² + ω6 s/Q6 + ω6²),
 
-  ω = 2π f, with (:data:`WEIGHTINGS`) Wb (EN 12299 vertical: f1 0.4, f2 100, f3 = f4 16 Hz, Q4 0.63,
-  f5 2.5, Q5 0.8, f6 4, Q6 0.8, K 0.4, so 0.4 below 2.5 Hz and 1.024 above 4 Hz), Wd (horizontal:
-  f3 = f4 2 Hz, Q4 0.63, no step), Wc (f3 = f4 8 Hz) and Wk (ISO 2631-1 vertical: f3 = f4 12.5 Hz,
-  Q4 0.63, f5 2.37, Q5 0.91, f6 3.35, Q6 0.91, K 1). They are applied in the frequency domain
-  (the record's FFT times H(j2πf)): the exact analytic response at every frequency, no bilinear
-  warping near the Nyquist frequency.
-* **N_MV** (EN 12299, the standard (simplified) method): the weighted accelerations' rms over
+  ω = 2π f, s = j ω. The upward step Hs tends to (f5/f6)² at low frequency and to 1 at high
+  frequency, so K is the high-frequency gain. The form is the one the Larson Davis HVM200
+  reference manual implements from ISO 8041 Table 3 (pp. 3-14 to 3-16: its Table 3.1, "source:
+  ISO 8041", and its filter code, upward step numerator [1/ω5², 1/(Q5 ω5), 1]·ω5²/ω6²,
+  denominator [1/ω6², 1/(Q6 ω6), 1]), and the one the printed tables agree with (both typed into
+  tests/cosim/test_comfort.py with their transcriptions named): ISO 8041-1:2017 Annex B gives Wk
+  0.4825 at 1 Hz and ISO 2631-1:1997 Table 3 0.482, where the step written
+  (1 + s/(Q5 ω5) + s²/ω5²)/(1 + s/(Q6 ω6) + s²/ω6²) (this module before, equal to the form above
+  times (f6/f5)²) gives twice that. Parameters (:data:`WEIGHTINGS`), all from ISO 8041 Table 3 as
+  quoted in that manual's Table 3.1 (ISO 8041 NOTE 1 there: its Wb is ISO 2631-4:2001 Table A.1's):
+
+  ====  =====  =====  =====  =====  ====  =====  ====  =====  ====  =====
+  name  f1 Hz  f2 Hz  f3 Hz  f4 Hz  Q4    f5 Hz  Q5    f6 Hz  Q6    K
+  ====  =====  =====  =====  =====  ====  =====  ====  =====  ====  =====
+  Wb    0.4    100    16     16     0.55  2.5    0.9   4      0.95  1.024
+  Wc    0.4    100    8      8      0.63  -      -     -      -     1
+  Wd    0.4    100    2      2      0.63  -      -     -      -     1
+  Wk    0.4    100    12.5   12.5   0.63  2.37   0.91  3.35   0.91  1
+  ====  =====  =====  =====  =====  ====  =====  ====  =====  ====  =====
+
+  Wb (vertical) and Wd (horizontal) are EN 12299's; EN 12299:2009 lists EN ISO 8041:2005 among
+  its normative references (the SR EN 12299:2009 catalogue entry), whose Wb this is. Two public
+  EN 12299 implementations (tobias-bettinger/comfpy comfpy/filters.py, which cites EN 12299:2009;
+  ifs-rwth-aachen/PyRidy pyridy/processing/comfort.py) use instead Q4 0.63, Q5 0.8, Q6 0.8 and
+  K 0.4 in the (1 + s/(Qω) + s²/ω²) form (the same gains 0.4 and 1.024, another shape: 13.4 %
+  higher near 17 Hz, 7.8 % lower near 4 Hz): this module used them until now.
+  Which of the two EN 12299:2009 Annex A prints was not read; ISO 8041's is the one its tables
+  (ISO 8041-1:2017 Annex B, Table B.1) confirm. Wk is ISO 2631-1's vertical weighting (seated,
+  comfort), Wc its seat-back one. Wp (EN 12299's roll velocity weighting) is not implemented.
+  The weightings are applied in the frequency domain (the record's FFT times H(j2πf)): the exact
+  analytic response at every frequency, no bilinear warping near the Nyquist frequency.
+* **N_MV** (EN 12299, standard (simplified) method): the weighted accelerations' rms over
   consecutive 5 s blocks, their 95th percentiles over the record (5 minutes in the standard),
-  N_MV = 6 √(a_XP95^Wd² + a_YP95^Wd² + a_ZP95^Wb²). Scale: < 1 very comfortable, 1-2 comfortable,
-  2-4 medium, 4-5 uncomfortable, > 5 very uncomfortable.
+  N_MV = 6 √(a_XP95^Wd² + a_YP95^Wd² + a_ZP95^Wb²). Scale (:data:`N_MV_SCALE`): N_MV < 1 very
+  comfortable, 1 ≤ N_MV < 2 comfortable, 2 ≤ N_MV < 4 medium, 4 ≤ N_MV < 5 uncomfortable,
+  N_MV ≥ 5 very uncomfortable, as pneumorail has quoted it from the literature: EN 12299's own
+  table was not read, nor a secondary source that prints it.
 * **Continuous comfort** Cc_x,y,z(t): the 5 s sliding rms of the weighted acceleration, every
-  second (EN 12299 Cc), in m/s².
+  second (EN 12299 Cc), in m/s². Its scale is not used (not printed, not checked).
 * **Sperling's ride index** in its spectral form (Wz = (∫ B(f)² G(f) df)^(1/6.67), G the one-sided
   PSD of the acceleration in (cm/s²)²/Hz over 0.5-30 Hz; B the vertical weighting 0.588 √((1.911 f² +
   (0.25 f²)²) / ((1 - 0.277 f²)² + (1.563 f - 0.0368 f³)²)), lateral 1.25 times it; as in Forstberg
   2000 and comfpy). Classical scale: 1 very good ... 4.5 not running-safe.
 * **ISO 2631-1 overall weighted rms** (comfort, seated): a_v = √(a_wx² + a_wy² + a_wz²), Wd on x and
-  y, Wk on z, multiplying factors 1.
+  y, Wk on z, multiplying factors 1. No comfort words are printed for it.
 """
 from __future__ import annotations
 
@@ -39,17 +65,39 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-#: name -> (f1, f2, f3, f4, Q4, f5, Q5, f6, Q6, K) [Hz, -]; f5 None: no upward step
+#: Q1 = Q2 of the band limits: two-pole Butterworth (ISO 8041 Table 3, "1/√2") [-]
+BAND_Q = 1.0 / math.sqrt(2.0)
+
+
+@dataclass(frozen=True)
+class Weighting:
+    """A frequency weighting of ISO 8041 Table 3's form (module docstring): band limits f1, f2
+    [Hz], acceleration-velocity transition f3, f4 [Hz] and Q4, upward step f5, f6 [Hz] and Q5,
+    Q6 (None: no step), high-frequency gain k [-]."""
+
+    f1_Hz: float
+    f2_Hz: float
+    f3_Hz: float
+    f4_Hz: float
+    q4: float
+    f5_Hz: Optional[float] = None
+    q5: Optional[float] = None
+    f6_Hz: Optional[float] = None
+    q6: Optional[float] = None
+    k: float = 1.0
+
+
+#: the weightings (ISO 8041 Table 3, as quoted in the module docstring)
 WEIGHTINGS = {
-    "Wb": (0.4, 100.0, 16.0, 16.0, 0.63, 2.5, 0.8, 4.0, 0.8, 0.4),
-    "Wd": (0.4, 100.0, 2.0, 2.0, 0.63, None, None, None, None, 1.0),
-    "Wc": (0.4, 100.0, 8.0, 8.0, 0.63, None, None, None, None, 1.0),
-    "Wk": (0.4, 100.0, 12.5, 12.5, 0.63, 2.37, 0.91, 3.35, 0.91, 1.0),
+    "Wb": Weighting(0.4, 100.0, 16.0, 16.0, 0.55, 2.5, 0.9, 4.0, 0.95, 1.024),
+    "Wc": Weighting(0.4, 100.0, 8.0, 8.0, 0.63),
+    "Wd": Weighting(0.4, 100.0, 2.0, 2.0, 0.63),
+    "Wk": Weighting(0.4, 100.0, 12.5, 12.5, 0.63, 2.37, 0.91, 3.35, 0.91),
 }
 #: EN 12299 block and evaluation lengths [s]
 BLOCK_S = 5.0
 STANDARD_RECORD_S = 300.0
-#: N_MV comfort scale (upper bounds) and names
+#: N_MV comfort scale: (upper bound, exclusive; name), EN 12299 as quoted in the module docstring
 N_MV_SCALE = ((1.0, "very comfortable"), (2.0, "comfortable"), (4.0, "medium"), (5.0, "uncomfortable"),
               (math.inf, "very uncomfortable"))
 #: Sperling's band [Hz]
@@ -57,19 +105,48 @@ WZ_BAND_HZ = (0.5, 30.0)
 AXES = ("x", "y", "z")
 
 
+def _omega(f_Hz: float) -> float:
+    """2π f [rad/s]."""
+    return 2.0 * math.pi * f_Hz
+
+
+def _quadratic(s, w: float, q: float):
+    """s² + ω s / Q + ω²."""
+    return s * s + w * s / q + w * w
+
+
+def band_limit(s, w1: float, w2: float):
+    """Hh Hl: the two-pole Butterworth high pass at ω1 and low pass at ω2 [rad/s]."""
+    return s * s / _quadratic(s, w1, BAND_Q) * w2 * w2 / _quadratic(s, w2, BAND_Q)
+
+
+def transition(s, w3: float, w4: float, q4: float):
+    """Ht: proportional to acceleration below ω3, ω4 and to velocity above [rad/s]."""
+    return (1.0 + s / w3) / (1.0 + s / (q4 * w4) + s * s / (w4 * w4))
+
+
+def upward_step(s, w5: float, q5: float, w6: float, q6: float):
+    """Hs: (ω5/ω6)² at low frequency, 1 at high frequency [rad/s]."""
+    return _quadratic(s, w5, q5) / _quadratic(s, w6, q6)
+
+
+def weighting_response(w: Weighting, f_Hz) -> np.ndarray:
+    """The complex frequency response H(j 2π f) of the weighting ``w``."""
+    s = 2j * math.pi * np.asarray(f_Hz, dtype=float)
+    h = band_limit(s, _omega(w.f1_Hz), _omega(w.f2_Hz)) * transition(s, _omega(w.f3_Hz), _omega(w.f4_Hz), w.q4)
+    if w.f5_Hz is not None:
+        h = h * upward_step(s, _omega(w.f5_Hz), w.q5, _omega(w.f6_Hz), w.q6)
+    return w.k * h
+
+
 def response(name: str, f_Hz) -> np.ndarray:
     """The complex frequency response H(j 2π f) of weighting ``name`` (:data:`WEIGHTINGS`)."""
-    f1, f2, f3, f4, q4, f5, q5, f6, q6, k = WEIGHTINGS[name]
-    s = 2j * math.pi * np.asarray(f_Hz, dtype=float)
-    w1, w2, w3, w4 = (2 * math.pi * f for f in (f1, f2, f3, f4))
-    q1 = 1.0 / math.sqrt(2.0)
-    h = s * s / (s * s + w1 * s / q1 + w1 * w1)
-    h = h * w2 * w2 / (s * s + w2 * s / q1 + w2 * w2)
-    h = h * (1.0 + s / w3) / (1.0 + s / (q4 * w4) + s * s / (w4 * w4))
-    if f5 is not None:
-        w5, w6 = 2 * math.pi * f5, 2 * math.pi * f6
-        h = h * (1.0 + s / (q5 * w5) + s * s / (w5 * w5)) / (1.0 + s / (q6 * w6) + s * s / (w6 * w6))
-    return k * h
+    return weighting_response(WEIGHTINGS[name], f_Hz)
+
+
+def n_mv_scale(n_mv: float) -> str:
+    """The name of ``n_mv`` on EN 12299's comfort scale (:data:`N_MV_SCALE`)."""
+    return next(name for bound, name in N_MV_SCALE if n_mv < bound)
 
 
 def sperling_weighting(f_Hz, axis: str) -> np.ndarray:
@@ -179,9 +256,7 @@ class ComfortResult:
     @property
     def scale(self) -> Optional[str]:
         """N_MV on EN 12299's comfort scale."""
-        if self.N_MV is None:
-            return None
-        return next(name for bound, name in N_MV_SCALE if self.N_MV < bound)
+        return None if self.N_MV is None else n_mv_scale(self.N_MV)
 
 
 def comfort(t_s: np.ndarray, accelerations: Dict[str, np.ndarray]) -> ComfortResult:
