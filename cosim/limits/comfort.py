@@ -44,10 +44,13 @@ ISO 2631-4:2001, ISO 8041); every value below names the secondary source it was 
   analytic response at every frequency, no bilinear warping near the Nyquist frequency.
 * **N_MV** (EN 12299, standard (simplified) method): the weighted accelerations' rms over
   consecutive 5 s blocks, their 95th percentiles over the record (5 minutes in the standard),
-  N_MV = 6 √(a_XP95^Wd² + a_YP95^Wd² + a_ZP95^Wb²). Scale (:data:`N_MV_SCALE`): N_MV < 1 very
-  comfortable, 1 ≤ N_MV < 2 comfortable, 2 ≤ N_MV < 4 medium, 4 ≤ N_MV < 5 uncomfortable,
-  N_MV ≥ 5 very uncomfortable, as pneumorail has quoted it from the literature: EN 12299's own
-  table was not read, nor a secondary source that prints it.
+  N_MV = 6 √(a_XP95^Wd² + a_YP95^Wd² + a_ZP95^Wb²). Scale (:data:`N_MV_SCALE`): N_MV < 1.5 very
+  comfortable, 1.5 ≤ N_MV < 2.5 comfortable, 2.5 ≤ N_MV < 3.5 medium, 3.5 ≤ N_MV < 4.5
+  uncomfortable, N_MV ≥ 4.5 very uncomfortable. EN 12299's own table was not read: this is the
+  scale implementations of its clause 6 use (e.g. the open ``ride_comfort`` scripts for N_MV, N_VD
+  and N_VA) and the one users of the standard expect; the 1 / 2 / 4 / 5 boundaries often quoted
+  with it are UIC leaflet 513's, EN 12299's predecessor (pneumorail printed those until it was
+  checked).
 * **Continuous comfort** Cc_x,y,z(t): the 5 s sliding rms of the weighted acceleration, every
   second (EN 12299 Cc), in m/s². Its scale is not used (not printed, not checked).
 * **Sperling's ride index** in its spectral form (Wz = (∫ B(f)² G(f) df)^(1/6.67), G the one-sided
@@ -97,8 +100,8 @@ WEIGHTINGS = {
 #: EN 12299 block and evaluation lengths [s]
 BLOCK_S = 5.0
 STANDARD_RECORD_S = 300.0
-#: N_MV comfort scale: (upper bound, exclusive; name), EN 12299 as quoted in the module docstring
-N_MV_SCALE = ((1.0, "very comfortable"), (2.0, "comfortable"), (4.0, "medium"), (5.0, "uncomfortable"),
+#: N_MV comfort scale: (upper bound, exclusive; name), EN 12299's (sources: the module docstring)
+N_MV_SCALE = ((1.5, "very comfortable"), (2.5, "comfortable"), (3.5, "medium"), (4.5, "uncomfortable"),
               (math.inf, "very uncomfortable"))
 #: Sperling's band [Hz]
 WZ_BAND_HZ = (0.5, 30.0)

@@ -153,12 +153,14 @@ def test_wk_and_wd_match_iso_2631_1_table_3_at_the_nominal_frequencies(name):
 
 
 # ------------------------------------------------------------------------ the comfort scale
-# EN 12299's N_MV scale as this module quotes it (EN 12299:2009 itself not read, see the module
-# docstring): N_MV < 1 very comfortable, 1 <= N_MV < 2 comfortable, 2 <= N_MV < 4 medium,
-# 4 <= N_MV < 5 uncomfortable, N_MV >= 5 very uncomfortable.
-@pytest.mark.parametrize("n_mv, name", [(0.0, "very comfortable"), (0.999, "very comfortable"), (1.0, "comfortable"),
-                                        (1.999, "comfortable"), (2.0, "medium"), (3.999, "medium"),
-                                        (4.0, "uncomfortable"), (4.999, "uncomfortable"), (5.0, "very uncomfortable"),
+# EN 12299's N_MV scale (clause 6 as its implementations print it; EN 12299:2009 itself not read,
+# see the module docstring): N_MV < 1.5 very comfortable, 1.5 <= N_MV < 2.5 comfortable,
+# 2.5 <= N_MV < 3.5 medium, 3.5 <= N_MV < 4.5 uncomfortable, N_MV >= 4.5 very uncomfortable. Not
+# UIC 513's 1 / 2 / 4 / 5 (1.0 and 2.0 are inside a class here).
+@pytest.mark.parametrize("n_mv, name", [(0.0, "very comfortable"), (1.0, "very comfortable"), (1.499, "very comfortable"),
+                                        (1.5, "comfortable"), (2.0, "comfortable"), (2.499, "comfortable"),
+                                        (2.5, "medium"), (3.499, "medium"), (3.5, "uncomfortable"),
+                                        (4.0, "uncomfortable"), (4.499, "uncomfortable"), (4.5, "very uncomfortable"),
                                         (50.0, "very uncomfortable")])
 def test_the_n_mv_scale(n_mv, name):
     assert n_mv_scale(n_mv) == name
