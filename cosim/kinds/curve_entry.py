@@ -580,7 +580,7 @@ def case_metrics(row: Dict[str, object], zoned: Dict[str, Dict[str, Dict[str, fl
     """The checkable metrics of a summary row (:attr:`KIND.check_metrics <cosim.kinds.base.Kind.check_metrics>`): the wheel
     metrics per wheel; ``yq_max`` and ``sum_y_max`` [N] only with contact guidance; the EN 14363
     assessment's per zone and wheel (``zoned``, :func:`cosim.kinds.en14363.zone_metrics`)."""
-    values = {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg")}
+    values = {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "air_lost_kg")}
     wheels = {m: {w: row[f"{m}_{w}"] for w in WHEELS} for m in ("dqq_raw_max", "dqq_2m_max")}
     if "sum_y_rms_max_N" in row:
         values["sum_y_rms_max"] = row["sum_y_rms_max_N"]

@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from cosim.limits.checks import CaseMetrics, check_report, check_value, passes
+from cosim.limits.checks import FAIL, PASS, VERDICT_LINE, CaseMetrics, CheckResult, check_report, check_value, evaluate, overall
 from cosim.limits.validity import failures
 from cosim.scenario.checks import Check
 from cosim.scenario.model import Scenario
@@ -93,6 +93,10 @@ class Outcome:
     def check_results(self) -> List[Tuple[Check, float]]:
         return [(c, self.check_value(c)[0]) for c in self.scenario.checks]
 
+    def evaluate(self, check: Check) -> CheckResult:
+        """See :func:`cosim.limits.checks.evaluate`."""
+        return evaluate(check, self.cases, self.metrics)
+
     def validity_failures(self) -> List[str]:
         """``case: flag`` for every validity flag (:mod:`cosim.limits.validity`) the scenario does not
         ``allow``."""
@@ -101,8 +105,7 @@ class Outcome:
     def checks_hold(self) -> bool:
         """Every limit holds, every case ran to its end and none left the models' validity
         (unless allowed)."""
-        return (all(passes(c, v) for c, v in self.check_results()) and not self.diverged
-                and not self.validity_failures())
+        return self.verdict()["status"] == PASS
 
     def check_report(self) -> str:
         lines = check_report(self.scenario.checks, self.cases, self.metrics).splitlines()[:-1]
@@ -110,23 +113,28 @@ class Outcome:
             lines.append(f"outside the model's validity: {failure} (FAIL; list it under the scenario's allow: to accept it)")
         if self.diverged:
             lines.append(f"diverged: {self.diverged} (FAIL)")
-        lines.append("all limits hold" if self.checks_hold() else "LIMIT VIOLATED")
+        lines.append(VERDICT_LINE[self.verdict()["status"]])
         return "\n".join(lines)
 
     def verdict(self) -> Dict[str, object]:
         """The machine-readable result of ``check`` (``check.json``): overall status, and every
         check, validity flag and divergence with its own status."""
-        items = []
-        for c in self.scenario.checks:
-            value, where = self.check_value(c)
-            items.append({"name": c.text, "metric": c.metric, "op": c.op, "limit": c.limit, "value": value,
-                          "at": where, "status": "pass" if passes(c, value) else "fail"})
-        items += [{"name": f"validity: {f}", "status": "fail", "message": "outside the model's validity"}
+        items = [self.check_item(self.evaluate(c)) for c in self.scenario.checks]
+        items += [{"name": f"validity: {f}", "status": FAIL, "message": "outside the model's validity"}
                   for f in self.validity_failures()]
         if self.diverged:
-            items.append({"name": "run completes", "status": "fail", "message": self.diverged})
+            items.append({"name": "run completes", "status": FAIL, "message": self.diverged})
         return {"scenario": str(self.scenario.file), "name": self.scenario.name, "kind": self.scenario.kind,
-                "status": "pass" if self.checks_hold() else "fail", "checks": items}
+                "status": overall([i["status"] for i in items]), "checks": items}
+
+    def check_item(self, r: CheckResult) -> Dict[str, object]:
+        """A check's entry of :meth:`verdict`; one whose value is missing says why in ``message``
+        (and that the run diverged, if it did: the ``run completes`` entry has the diagnosis)."""
+        item = {"name": r.check.text, "metric": r.check.metric, "op": r.check.op, "limit": r.check.limit,
+                "value": r.value, "at": r.where, "status": r.status}
+        if r.missing:
+            item["message"] = r.reason + (" (the run diverged)" if self.diverged else "")
+        return item
 
 
 def warn(found: List[str], message: str) -> None:

@@ -44,21 +44,25 @@ def write_outcome(outcome: Outcome, out: Path, figures: Sequence[Figure] = (), j
 
 def write_verdict(outcome: Outcome, out: Path) -> None:
     """``check.json`` (:meth:`Outcome.verdict`) and ``check.xml``, the same as a JUnit report
-    (one test case per check, validity flag and divergence) for CI systems."""
+    (one test case per check, validity flag and divergence; a check without a value is an error)
+    for CI systems."""
     verdict = outcome.verdict()
     with atomic_write(Path(out) / "check.json") as fh:
         fh.write(json.dumps(jsonable(verdict), indent=2, allow_nan=False) + "\n")
     items = verdict["checks"]
     suite = ET.Element("testsuite", name=f"pneumorail check {verdict['name']}", tests=str(len(items)),
-                       failures=str(sum(i["status"] == "fail" for i in items)), errors="0",
+                       failures=str(sum(i["status"] == "fail" for i in items)),
+                       errors=str(sum(i["status"] == "error" for i in items)),
                        time=f"{outcome.wall_s:.3f}")
     for item in items:
         case = ET.SubElement(suite, "testcase", classname=f"pneumorail.{verdict['name']}", name=item["name"])
         if "value" in item:
             ET.SubElement(case, "system-out").text = f"value {item['value']:.6g} at {item['at'] or 'the run'}"
         if item["status"] == "fail":
-            message = item.get("message") or f"{item['value']:.6g} violates {item['name']} ({item['at']})"
+            message = f"{item['value']:.6g} violates {item['name']} ({item['at']})" if "value" in item else item["message"]
             ET.SubElement(case, "failure", message=message)
+        elif item["status"] == "error":                     # a check without a value: why
+            ET.SubElement(case, "error", message=item["message"])
     with atomic_write(Path(out) / "check.xml") as fh:
         fh.write(ET.tostring(ET.ElementTree(suite).getroot(), encoding="unicode", xml_declaration=True) + "\n")
 

@@ -10,18 +10,23 @@ are the scenario key paths ``--set`` accepts (``curve.speed_m_per_s``); ``k_W_pe
 Each case is keyed by a hash of its resolved scenario -- the content of every file it reads, its sorted
 overrides and its k list -- and runs with ``run_scenario`` into ``OUT/cases/<key>/`` (its own
 summary.csv, run.json, time series and plots). When it has finished, ``done.json`` (its summary
-rows, check metrics, status) is written atomically: a rerun skips every case with a marker and
+rows, every checkable metric of each of its k / valve cases -- values, per wheel, per test zone --,
+status) is written atomically: a rerun skips every case with a marker and
 runs the others, so an interrupted sweep resumes where it stopped. A case that diverges is
 finished (status ``diverged``, the diagnosis kept); a case that raises or whose worker dies gets
 ``failed.json`` instead and is retried by the next run.
 
 Outputs: ``sweep.csv`` (one row per case and summary row, the grid values as columns, then every
 summary metric, ``status`` and ``diagnosis``), ``sweep.json`` (the definition and each case's
-key and status), ``sweep.nc`` (xarray) and plots of the headline metrics.
+key and status), ``sweep.nc`` (xarray) and plots of the headline metrics; with ``--check``,
+``check.json``: the base scenario's checks judged in every case by the same path as
+``pneumorail check`` (:func:`cosim.limits.checks.evaluate`: pass, fail, or error when a value is
+missing, saying why).
 """
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import itertools
 import json
@@ -30,6 +35,7 @@ import shutil
 import sys
 import time
 import traceback
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
@@ -38,11 +44,17 @@ import yaml
 
 from cosim.errors import ScenarioError
 from cosim.kinds import KINDS
-from cosim.results.io import Progress, atomic_write, csv_rows, write_rows
+from cosim.limits.checks import ERROR, FAIL, PASS, CaseMetrics, CheckResult, overall
+from cosim.results.io import Progress, atomic_write, csv_rows, jsonable, write_rows
+from cosim.results.outcome import Outcome
 from cosim.results.plots import pyplot
 from cosim.scenario.schema import folder_name, k_label, k_values
 
-DONE, FAILED = "done.json", "failed.json"
+DONE, FAILED, CHECK = "done.json", "failed.json", "check.json"
+#: what a case's done.json holds: 2, every field of each k / valve case's checkable metrics
+#: (:class:`~cosim.limits.checks.CaseMetrics`); a record without ``format`` (1) kept the plain and
+#: per-wheel metrics only, not the per-zone ones of the EN 14363 assessment
+RECORD_FORMAT = 2
 K_KEY = "k_W_per_K"
 #: the most cases a sweep expands (counted from the axes before anything is expanded): a
 #: hundred thousand cases of even a second each are more than a day on a workstation
@@ -275,6 +287,7 @@ class Prepared:
     base: Any                               # the base scenario (validated)
     cases: List[Case]
     scenarios: Dict[str, Any]               # case key -> validated Scenario
+    check: bool = False                     # judge the base scenario's checks: in every case (check.json)
 
 
 def prepare(spec: SweepSpec, check: bool = False) -> Prepared:
@@ -306,7 +319,7 @@ def prepare(spec: SweepSpec, check: bool = False) -> Prepared:
                                 f"two cases are the same scenario ({case.label})")
         scenarios[key] = _one_process(scenario)
         out.append(dataclasses.replace(case, key=key))
-    return Prepared(spec, base, out, scenarios)
+    return Prepared(spec, base, out, scenarios, check)
 
 
 def _blame(exc: ScenarioError, case: Case) -> Tuple[str, Any]:
@@ -361,8 +374,8 @@ def run_case(scenario, case_dir: str, record: Dict[str, Any]) -> Dict[str, Any]:
                   "wall_time_s": round(time.perf_counter() - t0, 3)}
         write_json_atomic(folder / FAILED, result)
         return result
-    result = {**record, "status": "diverged" if outcome.diverged else "ok", "diagnosis": outcome.diverged or "",
-              "rows": rows, "metrics": [_metrics_json(c) for c in outcome.cases],
+    result = {**record, "format": RECORD_FORMAT, "status": "diverged" if outcome.diverged else "ok",
+              "diagnosis": outcome.diverged or "", "rows": rows, "metrics": [metrics_json(c) for c in outcome.cases],
               "wall_time_s": round(time.perf_counter() - t0, 3)}
     write_json_atomic(folder / DONE, result)      # last: the case counts as finished from here
     return result
@@ -374,21 +387,70 @@ def write_json_atomic(path: Path, data: Mapping[str, Any]) -> None:
         json.dump(data, fh, indent=1)
 
 
-def _num(v: float):
-    return v if math.isfinite(v) else str(v)
+def metrics_json(case: CaseMetrics) -> Dict[str, Any]:
+    """Every field of a case's :class:`~cosim.limits.checks.CaseMetrics` as strict JSON (numbers
+    that are not finite as the text ``nan``, ``inf``): whatever a check can name is kept."""
+    return jsonable(dataclasses.asdict(case))
 
 
-def _metrics_json(case) -> Dict[str, Any]:
-    return {"k": k_label(case.k), "valves": case.valves,
-            "values": {m: _num(float(v)) for m, v in case.values.items()},
-            "wheels": {m: {w: _num(float(v)) for w, v in per.items()} for m, per in case.wheels.items()}}
+def metrics_from_json(item: Mapping[str, Any]) -> CaseMetrics:
+    """The :class:`~cosim.limits.checks.CaseMetrics` of :func:`metrics_json` (or of a format-1
+    record, without its per-zone metrics)."""
+    return CaseMetrics(**{name: _number_tree(value) for name, value in item.items()})
 
 
-def _metrics_from_json(items):
-    from cosim.limits.checks import CaseMetrics
-    return [CaseMetrics(float(d["k"]), bool(d["valves"]), {m: float(v) for m, v in d["values"].items()},
-                        {m: {w: float(v) for w, v in per.items()} for m, per in d["wheels"].items()})
-            for d in items]
+def _number_tree(value):
+    """JSON numbers (and nan/inf as text) back to floats, through nested mappings; booleans stay."""
+    if isinstance(value, Mapping):
+        return {key: _number_tree(v) for key, v in value.items()}
+    return value if isinstance(value, bool) else float(value)
+
+
+def case_verdict(scenario, record: Optional[Mapping[str, Any]], folder: str) -> Dict[str, Any]:
+    """The verdict of ``pneumorail check`` (:meth:`~cosim.results.outcome.Outcome.verdict`: status,
+    and an item per check, validity flag and divergence) for one case of a sweep, from its record
+    (None: not run). A case that failed or did not run has no value for any check (errors saying
+    so); a check a format-1 record cannot answer says how to recompute the case (``folder``)."""
+    status = record["status"] if record else "pending"
+    if status in ("ok", "diverged"):
+        outcome = Outcome(scenario, record["rows"], cases=[metrics_from_json(m) for m in record["metrics"]],
+                          diagnoses=[record["diagnosis"]] if status == "diverged" else [])
+        items = outcome.verdict()["checks"]
+        if record.get("format", 1) < RECORD_FORMAT:
+            items = [_recompute_hint(item, folder) for item in items]
+    else:
+        why = f"the case failed ({record['diagnosis']})" if status == "failed" else "the case has not run"
+        outcome = Outcome(scenario, [])
+        items = [outcome.check_item(CheckResult(c, math.nan, "", (why,))) for c in scenario.checks]
+    return {"status": overall([item["status"] for item in items]), "checks": items}
+
+
+def _recompute_hint(item: Dict[str, Any], folder: str) -> Dict[str, Any]:
+    if "metric" not in item or "message" not in item:
+        return item
+    return {**item, "message": f"{item['message']} ({folder}/{DONE} was written by an earlier pneumorail that kept "
+                               f"only some of a case's metrics: delete it and rerun the sweep to recompute the case)"}
+
+
+def item_line(item: Mapping[str, Any]) -> str:
+    """A verdict item as one line: ``FAIL dqq_max <= 0.6: 0.7 at k = 0, wheel 3R``, ``ERROR
+    yq_2m_p9985 <= 1.2: no value: ...``, ``FAIL run completes: diverged at ...``."""
+    value = item.get("value")
+    parts = [f"{value:.4g}" + (f" at {item['at']}" if item.get("at") else "")] \
+        if isinstance(value, float) and not math.isnan(value) else []
+    parts += [item["message"]] if item.get("message") else []
+    return f"{item['status'].upper()} {item['name']}: {'; '.join(parts)}"
+
+
+def write_check(outcome: "SweepOutcome") -> None:
+    """``check.json`` of a sweep run with ``--check`` that was not interrupted; otherwise an earlier
+    one is removed (it would not be this run's verdict)."""
+    path = outcome.out / CHECK
+    if outcome.prepared.check and not outcome.interrupted:
+        with atomic_write(path) as fh:
+            fh.write(json.dumps(jsonable(outcome.check_verdict()), indent=1, allow_nan=False) + "\n")
+    else:
+        path.unlink(missing_ok=True)
 
 
 # ------------------------------------------------------------------------------ the sweep
@@ -416,28 +478,20 @@ class SweepOutcome:
     def all_ok(self) -> bool:
         return all(self.status(c) == "ok" for c in self.prepared.cases)
 
+    @functools.cached_property
+    def verdicts(self) -> Dict[str, Dict[str, Any]]:
+        """Case key -> :func:`case_verdict`."""
+        return {c.key: case_verdict(self.prepared.scenarios[c.key], self.results.get(c.key), f"cases/{c.key}")
+                for c in self.prepared.cases}
+
     def check_failures(self) -> List[Tuple[Case, List[str]]]:
-        """Cases where a limit of the base scenario's ``checks:`` is violated, a result is outside
-        the models' validity (unless the scenario allows it), or that did not finish (a diverged
-        case fails every check; failed or pending cases cannot be checked)."""
-        from cosim.results.outcome import Outcome
-        bad = []
-        for case in self.prepared.cases:
-            record = self.results.get(case.key)
-            scenario = self.prepared.scenarios[case.key]
-            if record is None or record["status"] == "failed":
-                bad.append((case, [f"not checked: {record['status'] if record else 'not run'}"]))
-                continue
-            outcome = Outcome(scenario, record["rows"], cases=_metrics_from_json(record["metrics"]))
-            lines = []
-            for check in scenario.checks:
-                value, where = outcome.check_value(check)
-                if math.isnan(value) or not check.holds(value):
-                    lines.append(f"{check.text}: {value:.4g}" + (f" at {where}" if where else ""))
-            lines += [f"outside the model's validity: {f}" for f in outcome.validity_failures()]
-            if lines:
-                bad.append((case, lines))
-        return bad
+        """Cases whose verdict is not a pass -- a limit violated, a check without a value (the case
+        diverged, failed, did not run or did not keep the metric), a result outside the models'
+        validity (unless allowed), a divergence -- with a line (:func:`item_line`) per item that
+        does not pass."""
+        verdicts = [(c, self.verdicts[c.key]) for c in self.prepared.cases]
+        return [(c, [item_line(i) for i in v["checks"] if i["status"] != PASS]) for c, v in verdicts
+                if v["status"] != PASS]
 
     def check_report(self) -> str:
         checks = ", ".join(c.text for c in self.prepared.base.checks)
@@ -445,10 +499,21 @@ class SweepOutcome:
         n = len(self.prepared.cases)
         if not failures:
             return f"checks [{checks}]: all limits hold in every one of the {n} cases"
-        lines = [f"checks [{checks}]: LIMIT VIOLATED in {len(failures)} of {n} cases"]
-        for case, why in failures:
-            lines.append(f"  {case.key}  {case.label}: {'; '.join(why)}")
+        count = Counter(self.verdicts[c.key]["status"] for c, _ in failures)
+        parts = [f"{word} in {count[s]} of {n} cases" for s, word in ((FAIL, "LIMIT VIOLATED"),
+                                                                     (ERROR, "ERROR (a check without a value)"))
+                 if count[s]]
+        lines = [f"checks [{checks}]: {', '.join(parts)}"]
+        lines += [f"  {case.key}  {case.label}: {line}" for case, why in failures for line in why]
         return "\n".join(lines)
+
+    def check_verdict(self) -> Dict[str, Any]:
+        """``check.json``: the overall status and, per case, its run status and verdict."""
+        cases = [{"case": c.key, "label": c.label, "run": self.status(c), **self.verdicts[c.key]}
+                 for c in self.prepared.cases]
+        return {"scenario": str(self.prepared.spec.scenario_file), "name": self.prepared.base.name,
+                "checks": [c.text for c in self.prepared.base.checks],
+                "status": overall([c["status"] for c in cases]), "cases": cases}
 
     def report(self) -> str:
         counts = self.counts
@@ -535,6 +600,7 @@ def run_sweep(prepared: Prepared, out: Path, executor, quiet: bool = False, stre
         stream_.close()
     outcome = SweepOutcome(prepared, out, results, ran, skipped, interrupted)
     write_tables(outcome)
+    write_check(outcome)
     if not interrupted:
         outcome.notes += write_netcdf(outcome)
         outcome.notes += write_plots(outcome)

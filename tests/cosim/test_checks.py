@@ -229,3 +229,63 @@ def test_a_lower_limit_is_about_the_smallest_value(tmp_path):
     assert values["dqq_max[k=0] > 0.1"][0] == 0.01
     assert values["dqq_max <= 0.6"][0] == pytest.approx(0.37)
     assert [c.holds(v) for c, v in out.check_results()] == [False, False, True]
+
+
+# ----------------------------------------------------------------------------- missing values
+def _zoned(**zones) -> CaseMetrics:
+    return CaseMetrics(0.0, False, zones={"yq_2m_p9985": {z: {"1L": v} for z, v in zones.items()}})
+
+
+def test_a_check_without_a_value_is_an_error_naming_the_case_and_the_metric():
+    """A value a check covers that is missing -- NaN (a case that stopped) or never computed -- is
+    an ``error`` saying which case and metric, never a violation of NaN and never a pass; a value
+    that violates the limit fails the check whatever else is missing."""
+    from cosim.limits.checks import ERROR, FAIL, PASS, evaluate
+    check = Check("yq_2m_p9985", "<=", 1.2, "yq_2m_p9985 <= 1.2")
+    zoned = Check("yq_2m_p9985", "<=", 1.2, "z", zone="R<250")
+    fine, stopped = _zoned(straight=0.4), CaseMetrics(math.inf, False, zones={"yq_2m_p9985": {"straight": {"1L": math.nan}}})
+    r = evaluate(check, [fine])
+    assert (r.status, r.value, r.where, r.reason) == (PASS, 0.4, "k = 0, straight, wheel 1L", "")
+    r = evaluate(check, [fine, stopped])                          # the worst may be the one missing
+    assert r.status == ERROR and math.isnan(r.value) and r.reason == "no value: yq_2m_p9985 is NaN in k = inf"
+    r = evaluate(check, [CaseMetrics(0.0, False)])             # the case has no such metric at all
+    assert r.status == ERROR and math.isnan(r.value) and r.reason == "no value: k = 0 has no yq_2m_p9985"
+    r = evaluate(zoned, [fine])                                  # the run did not reach the zone
+    assert r.status == ERROR and r.reason == "no value: k = 0 has no yq_2m_p9985 in zone R<250"
+    r = evaluate(check, [_zoned(straight=1.3), stopped])         # a violation is a violation
+    assert r.status == FAIL and r.value == 1.3 and "is NaN in k = inf" in r.reason
+    for metric in ("roll_max_rad", "dqq_max"):                   # plain and per-wheel metrics alike
+        r = evaluate(Check(metric, "<=", 1.0, metric, wheel="3R" if metric == "dqq_max" else None),
+                     [CaseMetrics(0.0, True, {"roll_max_rad": math.nan}, {"dqq_max": {"1L": 0.1}})])
+        assert r.status == ERROR and math.isnan(r.value), r
+
+
+def test_check_and_its_files_say_error_for_a_check_without_a_value(tmp_path):
+    """``pneumorail check``'s verdict (check.json, check.xml, the text) through the same path: the
+    check without a value is an error with its reason (a JUnit <error>), the run's status
+    ``error``, the last line not a violation."""
+    import xml.etree.ElementTree as ET
+
+    from cosim.results.writer import write_verdict
+    s = load(tmp_path, {**en_data(), "checks": ["dqq_max <= 0.6", "dqq_qs_max <= 0.6"]})
+    cases = [CaseMetrics(k, v, wheels={"dqq_max": {w: 0.2 for w in WHEELS}}) for v in (False, True)
+             for k in (0.0, 100.0, math.inf)]
+    out = _outcome(s, cases)
+    verdict = out.verdict()
+    assert verdict["status"] == "error" and [c["status"] for c in verdict["checks"]] == ["pass", "error"]
+    assert verdict["checks"][1]["message"].startswith("no value: k = 0, valves off has no dqq_qs_max;")
+    report = out.check_report().splitlines()
+    assert "ERROR" in report[2] and "k = inf, valves on has no dqq_qs_max" in report[2] and "nan" not in report[2]
+    assert report[-1] == "ERROR: a check has no value" and not out.checks_hold()
+    write_verdict(out, tmp_path)
+    suite = ET.parse(tmp_path / "check.xml").getroot()
+    assert (suite.get("failures"), suite.get("errors")) == ("0", "1")
+    assert suite.find("testcase[@name='dqq_qs_max <= 0.6']/error").get("message") == verdict["checks"][1]["message"]
+    # a diverged run: its NaN is an error that says the run diverged; the divergence fails the run
+    import dataclasses
+    cases[0].wheels["dqq_max"]["2L"] = math.nan
+    stopped = dataclasses.replace(_outcome(s, cases), diagnoses=["k = 0, valves off: diverged at t = 3 s"])
+    items = stopped.verdict()["checks"]
+    assert items[0]["status"] == "error" and items[0]["message"].endswith("(the run diverged)")
+    assert items[-1] == {"name": "run completes", "status": "fail", "message": "k = 0, valves off: diverged at t = 3 s"}
+    assert stopped.verdict()["status"] == "fail" and stopped.check_report().endswith("LIMIT VIOLATED")
