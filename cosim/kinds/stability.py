@@ -498,8 +498,8 @@ def verdict_columns(row: Dict[str, object], brute_force: Sequence[Dict[str, obje
     (``nonlinear_critical_speed_m_per_s``) is the lowest of: the brute-force onset (smallest
     disturbance), the lowest brute-force speed at which any disturbance hunts, and the speed where
     the ramp-down's limit cycle died. A ramp-down whose limit cycle never died hunts down to its
-    last speed at least: the critical speed lies below the ramp, unknown (NaN, and a lower limit
-    on it fails). Rows without a time-domain analysis (the static-stiffness ones) keep the linear
+    last speed at least: the critical speed lies below the ramp, unknown (NaN: a check on it is
+    an ERROR). Rows without a time-domain analysis (the static-stiffness ones) keep the linear
     verdict."""
     linear = float(row["linear_critical_speed_m_per_s"])
     found = {}
@@ -538,7 +538,7 @@ def _centre_conicity(car) -> float:
 def _critical_columns(cars, air, scan, v_crit, bracket, note) -> Dict[str, object]:
     """The critical speed's columns of a summary row (see :func:`run`): the speed (inf: stable over
     the whole scan; NaN when a mode grows already at the lowest speed -- the critical speed lies
-    below the scan, unknown, and a check on it fails), and the least damped mode where it grows (at
+    below the scan, unknown, and a check on it is an ERROR), and the least damped mode where it grows (at
     the bracket's growing end, or the lowest speed)."""
     from cosim.stability.critical import least_damped, modes_at
     lowest = min((m.damping_ratio for ms in scan.modes for m in ms), default=math.nan)
