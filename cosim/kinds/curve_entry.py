@@ -43,13 +43,13 @@ from cosim.limits.criteria import (
 from cosim.results.io import Progress, read_rows
 from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection, case_series
-from cosim.results.plots import Curve, Figure, Panel, save_panels
+from cosim.results.plots import Curve, Figure, Panel, Span, save_panels
 from cosim.results.series import WHEELSETS, with_column
 from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
 from cosim.scenario.schema import Range, build, check_valve_settings, describe, positive
 from vehicle.irregularities import CHANNELS, MAX_SAMPLES, PERIOD_FACTOR, TrackIrregularity, canonical_kind
 from vehicle.params import BELLOWS, WHEELS, ContactParams, VehicleParams
-from vehicle.track import TRANSITION_SHAPES, TrackGeometry
+from vehicle.track import TRANSITION_SHAPES, Arc, TrackGeometry
 
 #: Largest cant [rad]: 0.2 rad is 300 mm over the 1.5 m rail-centre distance; railway cant is
 #: limited to 150-200 mm (EN 13803: 180 mm, ~0.12 rad).
@@ -696,15 +696,20 @@ def wheel_rail_summary(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
 
 
 def figures(outcome: Outcome) -> List[Figure]:
-    """Carbody roll (paper Fig. 9), per valve setting the bellows, and the air consumption."""
+    """Carbody roll (paper Fig. 9), per valve setting the bellows, and the air consumption; the roll
+    and, with contact, the wheel-rail quantities also along the track (:func:`along_track`), each
+    such figure named after its time figure with ``_along_track``."""
     if not outcome.rows:
         return []
     ds = outcome.series["curve"]
-    settings = outcome.scenario.curve.valve_settings
+    curve = outcome.scenario.curve
+    axis = track_axis(outcome.scenario, ds["time"].values)
+    settings = curve.valve_settings
     roll = [Panel(per_case(of_setting(ds, v)["roll_rel_rad"], 1e3), "time t [s]",
                   "carbody roll to the track plane [mrad]", f"valves {'connected' if v else 'disconnected'}")
             for v in settings]
-    out = [Figure("fig9_roll.png", roll, "Carbody roll entering a curve (paper Fig. 9)", len(roll))]
+    out = along_track(Figure("fig9_roll.png", roll, "Carbody roll entering a curve (paper Fig. 9)", len(roll)),
+                      [axis.centre_m for _ in roll], [axis.spans] * len(roll), "car centre", axis.outer_text)
     for valves in settings:
         sub = of_setting(ds, valves)
         tag = "on" if valves else "off"
@@ -720,33 +725,108 @@ def figures(outcome: Outcome) -> List[Figure]:
                                      "air exhausted to the atmosphere [g]")],
                               "Air consumption of the levelling valves (paper Table 4)", 2))
         out += fault_figure(outcome.scenario, sub, f"_valves={tag}", f", valves {tag}")
-    if outcome.scenario.curve.contact:
-        out += wheel_rail_figures(ds, outcome.scenario.curve, outcome.rows)
+    if curve.contact:
+        out += wheel_rail_figures(ds, curve, outcome.rows, axis)
     return out
 
 
-def wheel_rail_figures(ds: xr.Dataset, curve: CurveTest, rows: List[Dict[str, object]]) -> List[Figure]:
+@dataclass(frozen=True)
+class TrackAxis:
+    """Where a curve run's samples lie along the track: ``centre_m`` the car centre's arc length
+    at each sample [m], ``wheelset_x_m`` each wheelset's offset from it (front first), ``spans``
+    the track's segments as they are drawn (:func:`track_spans`) and ``outer`` the side of the
+    outer rail in the curve (``R`` or ``L``)."""
+
+    centre_m: np.ndarray
+    wheelset_x_m: Tuple[float, ...]
+    spans: Tuple[Span, ...]
+    outer: str
+
+    def wheelset(self, wheelset: str, shift_m: float = 0.0) -> np.ndarray:
+        """Arc length [m] of wheelset ``1`` ... ``4`` at each sample, plus ``shift_m``."""
+        return self.centre_m + self.wheelset_x_m[WHEELSETS.index(wheelset)] + shift_m
+
+    def wheel(self, wheel: str, shift_m: float = 0.0) -> np.ndarray:
+        return self.wheelset(wheel[:-1], shift_m)
+
+    def rail(self, wheel: str) -> str:
+        """`` (outer rail)`` / `` (inner rail)`` of a wheel in the curve."""
+        return " (outer rail)" if wheel[-1] == self.outer else " (inner rail)"
+
+    @property
+    def outer_text(self) -> str:
+        side = "right" if self.outer == "R" else "left"
+        return f"outer rail {side} (wheels 1{self.outer}-4{self.outer})"
+
+
+def track_axis(scenario: Scenario, t_s: np.ndarray) -> TrackAxis:
+    """The :class:`TrackAxis` of a curve run sampled at ``t_s``."""
+    curve = scenario.curve
+    return TrackAxis(car_centre_s_m(scenario, t_s), tuple(scenario.vehicle.wheelset_x_m), track_spans(curve.track()),
+                     "R" if curve.direction > 0 else "L")
+
+
+def track_spans(track: TrackGeometry) -> Tuple[Span, ...]:
+    """The track's segments as spans of a position axis: straights unshaded, transitions and arcs
+    shaded, each named with its EN 14363 test zone (:func:`cosim.kinds.en14363.zone_table`)."""
+    starts, zones, _ = en14363.zone_table(track)
+    ends = [*starts[1:], track.total_length_m]
+    spans = []
+    for seg, zone, a, b in zip(track.segments, zones, starts, ends):
+        if isinstance(seg, Arc):
+            spans.append(Span(a, b, f"arc R = {seg.radius_m:g} m (zone {zone})"))
+        else:
+            spans.append(Span(a, b, zone, shade=zone != "straight"))
+    return tuple(spans)
+
+
+def along_track(figure: Figure, positions: Sequence[np.ndarray], spans: Sequence[Sequence[Span]], where: str,
+                note: str = "") -> List[Figure]:
+    """``figure`` (panels against time) and its twin along the track: each panel's curves against
+    the arc length of what they belong to (``positions``, one per panel: the car centre, a wheel
+    at its 2 m window's centre ...), with its track's segments and zones marked (``spans``, one
+    list per panel); ``where`` names the position in the axis label, ``note`` is added to the
+    title (e.g. which rail is outer)."""
+    panels = [dataclasses.replace(p, curves=[dataclasses.replace(c, x=s) for c in p.curves],
+                                  xlabel=f"position along the track s [m] ({where})", spans=list(marks))
+              for p, s, marks in zip(figure.panels, positions, spans)]
+    title = f"{figure.title}, along the track" + (f"; {note}" if note else "")
+    return [figure, dataclasses.replace(figure, name=figure.name.replace(".png", "_along_track.png"), panels=panels,
+                                        title=title)]
+
+
+def wheel_rail_figures(ds: xr.Dataset, curve: CurveTest, rows: List[Dict[str, object]],
+                       axis: TrackAxis) -> List[Figure]:
     """Contact guidance, per valve setting: Y/Q (2 m sliding mean) per wheel across k with Nadal's
-    limit, ΔQ/Q0 per wheel across k, ΣY (2 m sliding mean) per wheelset with Prud'homme's limit."""
+    limit, ΔQ/Q0 per wheel across k, ΣY (2 m sliding mean) per wheelset with Prud'homme's limit;
+    each against time and along the track (a 2 m mean at its window's centre: 1 m behind the
+    wheel), every wheel's panel naming its rail in the curve."""
     yq_lim, sum_y_lim = rows[0]["yq_lim"], rows[0]["sum_y_lim_N"]
     nadal = [(yq_lim, f"Nadal limit {yq_lim:.2f} ({curve.nadal_flange_angle_deg:g}°, μ = {curve.nadal_friction:g})")]
     prud = [(sign * sum_y_lim * 1e-3, f"{'+' if sign > 0 else '-'}Prud'homme limit {sum_y_lim * 1e-3:.1f} kN")
             for sign in (1.0, -1.0)]
+    centre = -0.5 * SLIDING_MEAN_M                        # a trailing 2 m mean belongs to its window's centre
     out = []
     for valves in curve.valve_settings:
         sub = of_setting(ds, valves)
         tag = "on" if valves else "off"
         yq = [Panel(per_case(sub["y_over_q_2m"].sel(wheel=w)), "time t [s]", f"(Y/Q)_2m, wheel {w}",
-                    f"wheel {w}", hlines=nadal) for w in WHEELS]
-        out.append(Figure(f"wheel_yq_valves={tag}.png", yq,
-                          f"Y/Q per wheel, {SLIDING_MEAN_M:g} m sliding mean (EN 14363), valves {tag}", 2))
-        dqq = [Panel(per_case(sub["dqq"].sel(wheel=w)), "time t [s]", f"ΔQ/Q0, wheel {w}", f"wheel {w}")
+                    f"wheel {w}{axis.rail(w)}", hlines=nadal) for w in WHEELS]
+        out += along_track(Figure(f"wheel_yq_valves={tag}.png", yq,
+                                  f"Y/Q per wheel, {SLIDING_MEAN_M:g} m sliding mean (EN 14363), valves {tag}", 2),
+                           [axis.wheel(w, centre) for w in WHEELS], [axis.spans] * len(WHEELS),
+                           "the wheel's 2 m window centre", axis.outer_text)
+        dqq = [Panel(per_case(sub["dqq"].sel(wheel=w)), "time t [s]", f"ΔQ/Q0, wheel {w}", f"wheel {w}{axis.rail(w)}")
                for w in WHEELS]
-        out.append(Figure(f"wheel_dqq_valves={tag}.png", dqq, f"Wheel unloading ΔQ/Q0 per wheel, valves {tag}", 2))
+        out += along_track(Figure(f"wheel_dqq_valves={tag}.png", dqq, f"Wheel unloading ΔQ/Q0 per wheel, valves {tag}",
+                                  2), [axis.wheel(w) for w in WHEELS], [axis.spans] * len(WHEELS), "the wheel",
+                           axis.outer_text)
         sum_y = [Panel(per_case(sub["sum_y_2m_N"].sel(wheelset=ws), 1e-3), "time t [s]", "(ΣY)_2m [kN]",
                        f"wheelset {ws}", hlines=prud) for ws in WHEELSETS]
-        out.append(Figure(f"wheelset_sum_y_valves={tag}.png", sum_y,
-                          f"ΣY per wheelset (+ left), {SLIDING_MEAN_M:g} m sliding mean, valves {tag}", 2))
+        out += along_track(Figure(f"wheelset_sum_y_valves={tag}.png", sum_y,
+                                  f"ΣY per wheelset (+ left), {SLIDING_MEAN_M:g} m sliding mean, valves {tag}", 2),
+                           [axis.wheelset(ws, centre) for ws in WHEELSETS], [axis.spans] * len(WHEELSETS),
+                           "the wheelset's 2 m window centre", axis.outer_text)
     return out
 
 

@@ -29,7 +29,7 @@ from cosim.limits.checks import CaseMetrics
 from cosim.results.io import Progress, read_rows
 from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection
-from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
+from cosim.results.plots import Curve, Figure, Panel, Span, k_legend, save_panels
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import Range, build, check_valve_settings, positive
 from vehicle.params import FLOOR_POINTS, VehicleParams
@@ -196,9 +196,6 @@ def figures(outcome: Outcome) -> List[Figure]:
     keys = sorted({(r["valves"], r["k_W_per_K"]) for r in rows})
     multi = len({r["valves"] for r in rows}) > 1
 
-    def label(valves, k):
-        return (f"valves {'on' if valves else 'off'}, " if multi else "") + k_legend(k)
-
     panels = []
     for column, name in (("N_MV_{}", "N_MV [-]"), ("Wz_y_{}", "Wz lateral [-]"), ("Wz_z_{}", "Wz vertical [-]")):
         for point in FLOOR_POINTS:
@@ -206,7 +203,7 @@ def figures(outcome: Outcome) -> List[Figure]:
             for valves, k in keys:
                 mine = sorted((r["speed_m_per_s"], r.get(column.format(point), np.nan)) for r in rows
                               if (r["valves"], r["k_W_per_K"]) == (valves, k))
-                curves.append(Curve([m[0] for m in mine], [m[1] for m in mine], label(valves, k), "o-"))
+                curves.append(Curve([m[0] for m in mine], [m[1] for m in mine], legend(valves, k, multi), "o-"))
             panels.append(Panel(curves, "speed v [m/s]", name, f"floor, {point}"))
     out = [Figure("comfort_vs_speed.png", panels, "Ride comfort against speed (EN 12299 N_MV, Sperling Wz)", 3)]
     psd = []
@@ -224,11 +221,43 @@ def figures(outcome: Outcome) -> List[Figure]:
                     continue
                 f, p = welch(a - a.mean(), fs=fs, nperseg=min(a.size, int(20 * fs)))
                 case = ds.isel(case=j)
-                curves.append(Curve(f[1:], p[1:], label(bool(case["valves"]), float(case["k_W_per_K"]))))
+                curves.append(Curve(f[1:], p[1:], legend(bool(case["valves"]), float(case["k_W_per_K"]), multi)))
             psd.append(Panel(curves, "frequency f [Hz]", f"PSD of the {long} floor acceleration [(m/s²)²/Hz]",
                              f"{name.split('=')[1]} m/s, car centre", logx=True, logy=True))
     out.append(Figure("psd_floor.png", psd, "Floor accelerations at the car centre: power spectral density (Welch)", 2))
-    return out
+    return out + floor_figures(outcome)
+
+
+def legend(valves: bool, k: float, valves_named: bool) -> str:
+    """A case's legend: its k, after its valve setting when the run has several."""
+    return (f"valves {'on' if valves else 'off'}, " if valves_named else "") + k_legend(k)
+
+
+def floor_figures(outcome: Outcome) -> List[Figure]:
+    """The lateral and vertical (less g) floor accelerations at the car centre, a panel per speed
+    and direction, against time and along the track (:func:`cosim.kinds.curve_entry.along_track`:
+    each speed's own track, its segments and the comfort record marked)."""
+    ride, scenario = outcome.scenario.ride, outcome.scenario
+    multi = len(ride.valve_settings) > 1
+    panels, positions, spans = [], [], []
+    for v in ride.speeds_m_per_s:
+        ds = outcome.series[f"ride_v={v:g}"]
+        curve, start = curve_at(ride, v, scenario.vehicle)
+        axis = curve_entry.track_axis(_speed_scenario(scenario, curve), ds["time"].values)
+        record = Span(float(np.interp(start, ds["time"].values, axis.centre_m)), float(axis.centre_m[-1]),
+                      f"comfort record from t = {start:g} s", shade=False)
+        for axis_name, long, offset in (("y", "lateral", 0.0),
+                                        ("z", "vertical, less g", scenario.vehicle.gravity_m_per_s2)):
+            accel = ds[f"floor_a{axis_name}_m_per_s2"].sel(floor_point="centre") - offset
+            curves = [Curve(ds["time"].values, accel.isel(case=j).values,
+                            legend(bool(ds["valves"].values[j]), float(ds["k_W_per_K"].values[j]), multi))
+                      for j in range(ds.sizes["case"])]
+            panels.append(Panel(curves, "time t [s]", f"{long} floor acceleration [m/s²]", f"{v:g} m/s, car centre"))
+            positions.append(axis.centre_m)
+            spans.append([*axis.spans, record])
+    where = "straight track" if ride.radius_m is None else f"R = {ride.radius_m:g} m, {axis.outer_text}"
+    figure = Figure("floor_accelerations.png", panels, f"Floor accelerations at the car centre ({where})", 2)
+    return curve_entry.along_track(figure, positions, spans, "car centre")
 
 
 def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:

@@ -29,7 +29,7 @@ from cosim.limits.criteria import DQQ_LIMIT, en14363_twist_limit, static_wheel_l
 from cosim.results.io import Progress
 from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection, case_series, worst_wheels
-from cosim.results.plots import Curve, Figure, Panel, save_panels
+from cosim.results.plots import Curve, Figure, Panel, Span, save_panels
 from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
 from cosim.scenario.schema import Range, build, check_valve_settings, k_label, positive
 from vehicle.params import WHEELS, VehicleParams
@@ -375,7 +375,35 @@ def figures(outcome: Outcome) -> List[Figure]:
                        f"Wheel unloading ΔQ/Q0 (positive: unloaded){valves}", 2),
                 Figure(f"bellows{suffix}.png", bellow_panels(sub), f"Bellow pressures and temperatures{valves}", 2)]
         out += fault_figure(outcome.scenario, sub, suffix, valves)
-    return out
+    return out + [track_figure(outcome)]
+
+
+def track_figure(outcome: Outcome) -> Figure:
+    """The car stands still, so along the track is along the car: the rail heights under each
+    wheelset at the end of the ramp, and the quasi-static wheel unloading of each wheel at its
+    wheelset's position on the car (a line per rail and case), the bogies marked."""
+    test, rows = outcome.scenario.twist, outcome.rows
+    x = np.asarray(outcome.scenario.vehicle.wheelset_x_m)
+    heights = rail_heights(test)(test.duration_s)
+    sides = {"L": "left", "R": "right"}
+    rails = [Curve(x, [1e3 * h for h, w in zip(heights, WHEELS) if w[-1] == side], f"{name} rail", "o-")
+             for side, name in sides.items()]
+    multi = len({r["valves"] for r in rows}) > 1
+    unloading = [Curve(x, [r[f"dqq_qs_{w}"] for w in WHEELS if w[-1] == side],
+                       f"{name} wheels, " + (f"valves {'on' if r['valves'] else 'off'}, " if multi else "")
+                       + f"k = {k_label(r['k_W_per_K'])} W/K", "o-")
+               for side, name in sides.items() for r in rows]
+    bogies = [Span(x[1], x[0], "front bogie"), Span(x[3], x[2], "rear bogie")]
+    limit = _dqq_limit(outcome.scenario)
+    along = "position along the track from the car centre x [m] (+ forward)"
+    raised = ", ".join(test.raised_wheels)
+    return Figure("twist_along_track.png",
+                  [Panel(rails, along, "rail height [mm]", f"rails at the end of the ramp (raised under {raised})",
+                         spans=bogies),
+                   Panel(unloading, along, "quasi-static ΔQ/Q0 [-] (final window mean)", "each wheel at its wheelset",
+                         hlines=[(limit, f"limit {limit:g}")],
+                         spans=bogies)],
+                  f"The twist along the car standing on it: rail heights and wheel unloading (raised under {raised})", 2)
 
 
 def record_headlines(scenario: Scenario, rec: Dict[str, np.ndarray], j: int = 0) -> Dict[str, object]:

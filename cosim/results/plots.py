@@ -34,9 +34,21 @@ class Curve:
 LINE_STYLES = ("-", "--", ":", "-.")
 
 
+@dataclass(frozen=True)
+class Span:
+    """A stretch of the x axis to shade and name, e.g. a test zone of the track: from ``start`` to
+    ``end``, ``label`` written at its top; ``shade`` False: only its boundaries are drawn."""
+
+    start: float
+    end: float
+    label: str
+    shade: bool = True
+
+
 @dataclass
 class Panel:
-    """One axes: curves, labels (with units), optional horizontal reference lines."""
+    """One axes: curves, labels (with units), optional horizontal reference lines and stretches of
+    the x axis (:class:`Span`: the track's zones along a position axis)."""
 
     curves: List[Curve]
     xlabel: str
@@ -45,6 +57,7 @@ class Panel:
     logx: bool = False
     logy: bool = False
     hlines: List[Tuple[float, str]] = field(default_factory=list)
+    spans: List[Span] = field(default_factory=list)
 
 
 @dataclass
@@ -98,6 +111,7 @@ def draw_panels(panels: Sequence[Panel], suptitle: Optional[str] = None, ncols: 
             ax.axhline(value, color="k", ls="--", lw=0.9)
             ax.annotate(label, (0.01, value), xycoords=("axes fraction", "data"), fontsize=8,
                         va="bottom", color="k")
+        draw_spans(ax, panel.spans)
         if panel.logx:
             ax.set_xscale("log")
         if panel.logy:
@@ -117,6 +131,37 @@ def draw_panels(panels: Sequence[Panel], suptitle: Optional[str] = None, ncols: 
     # tight layout below the title (constrained layout does the same at twice the cost)
     fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - title_in / height_in))
     return fig
+
+
+#: the shades of successive spans (by their place in the list: the same span has the same shade in
+#: every panel); the band above the curves that holds the spans' labels (fraction of the y range)
+SPAN_SHADES = ("#f3d9b1", "#cfe0f3")
+SPAN_LABEL_BAND = 0.2
+
+
+def draw_spans(ax, spans: Sequence[Span]) -> None:
+    """Shade the spans within the axes' x range (the curves' range: the spans do not widen it), a
+    dotted line at each boundary, each label in a band added above the curves (every other one a
+    line lower, so that short neighbours do not overlap)."""
+    lo, hi = ax.get_xlim()
+    shown = [(i, s) for i, s in enumerate(spans) if s.end > lo and s.start < hi]
+    if not shown:
+        return
+    bottom, top = ax.get_ylim()
+    if ax.get_yscale() == "log":
+        ax.set_ylim(bottom, top * (top / bottom) ** SPAN_LABEL_BAND)
+    else:
+        ax.set_ylim(bottom, top + SPAN_LABEL_BAND * (top - bottom))
+    for row, (i, s) in enumerate(shown):
+        a, b = max(s.start, lo), min(s.end, hi)
+        if s.shade:
+            ax.axvspan(a, b, color=SPAN_SHADES[i % len(SPAN_SHADES)], alpha=0.45, lw=0, zorder=0)
+        for edge in (s.start, s.end):
+            if lo < edge < hi:
+                ax.axvline(edge, color="0.35", ls=":", lw=0.8, zorder=1)
+        ax.text(0.5 * (a + b), 0.99 - 0.045 * (row % 2), s.label, transform=ax.get_xaxis_transform(), ha="center",
+                va="top", fontsize=7, color="0.2", clip_on=True)
+    ax.set_xlim(lo, hi)
 
 
 def k_legend(k: float) -> str:

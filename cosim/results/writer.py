@@ -1,7 +1,8 @@
 """Turn an :class:`~cosim.results.outcome.Outcome` into files: the time series (CSV, one file per
 case), ``summary.csv`` and the outcome's further tables (``<name>.csv``), the figures (PNG) and
-``run.json`` (provenance, status, metrics, diagnoses, warnings), in that order; every file is
-written atomically."""
+``run.json`` (provenance, status, metrics, diagnoses, warnings, and what the report shows: the
+parameters and where each came from, the faults, the figures' titles), in that order; every file
+is written atomically."""
 from __future__ import annotations
 
 import dataclasses
@@ -10,7 +11,7 @@ import textwrap
 import xml.etree.ElementTree as ET
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Sequence
+from typing import List, Sequence
 
 from cosim.results.io import atomic_write, jsonable, write_columns, write_rows, write_run_json
 from cosim.results.outcome import Outcome
@@ -39,7 +40,72 @@ def write_outcome(outcome: Outcome, out: Path, figures: Sequence[Figure] = (), j
     save_figures(out, figures, jobs)
     write_run_json(out, outcome.scenario, outcome.wall_s, "interrupted" if outcome.interrupted else "complete",
                    {"diverged": outcome.diverged, "metrics": outcome.metrics, "warnings": outcome.warnings,
-                    **outcome.info})
+                    **report_facts(outcome, figures), **outcome.info})
+
+
+def report_facts(outcome: Outcome, figures: Sequence[Figure] = ()) -> dict:
+    """What ``pneumorail report`` shows beyond the results: the summary columns the kind shows
+    (``summary_columns``), the faults in words, every parameter the car and its circuit ran with
+    and where each value came from (:func:`parameter_groups`), and each figure's title (its
+    caption: the run's own radius, limits ...)."""
+    faults = getattr(outcome.scenario.circuit, "faults", ()) or ()
+    return {"summary_columns": list(outcome.shown), "faults": [f.label() for f in faults],
+            "parameters": parameter_groups(outcome.scenario),
+            "figures": {f.name: f.title or "" for f in figures}}
+
+
+#: the parts of a circuit whose parameters are listed, and which of them a circuit preset gives
+CIRCUIT_PARTS = ("bellow", "tank", "pipe", "cross_pipe", "levelling_valve", "differential_valve", "supply")
+PRESET_PARTS = ("bellow", "tank", "pipe")
+#: fields that name the components a part connects, not a parameter of it
+CONNECTIONS = ("a", "b", "bellow", "supply", "exhaust", "sensed")
+
+
+def parameter_groups(scenario) -> List[dict]:
+    """The vehicle's and the circuit's parameters as the run used them, by group (``vehicle``,
+    ``circuit bellow`` ...): ``base`` (what the values come from: a preset, a parameter file, the
+    defaults), ``values`` (name -> value) and ``set`` (name -> ``scenario`` or ``--set``: the
+    values the scenario or the command line put over the base)."""
+    raw, overrides = scenario.raw or {}, [o.split("=", 1)[0].strip() for o in scenario.overrides]
+    groups = []
+    if getattr(scenario, "vehicle", None) is not None:
+        groups.append(_group("vehicle", scenario.vehicle, ("vehicle",), raw, overrides, _vehicle_base(raw.get("vehicle"))))
+    circuit_raw = raw.get("circuit") if isinstance(raw.get("circuit"), dict) else {}
+    preset = circuit_raw.get("preset")
+    for part in CIRCUIT_PARTS:
+        value = getattr(scenario.circuit, part, None)
+        if dataclasses.is_dataclass(value):
+            base = f"preset {preset}" if preset and part in PRESET_PARTS else "defaults"
+            groups.append(_group(f"circuit {part.replace('_', ' ')}", value, ("circuit", part), raw, overrides, base))
+    return groups
+
+
+def _group(name: str, params, path, raw: dict, overrides: Sequence[str], base: str) -> dict:
+    """One group of :func:`parameter_groups`: ``params`` (a dataclass) at ``path`` in the scenario."""
+    given = raw
+    for key in path:
+        given = given.get(key) if isinstance(given, dict) else None
+    given = given if isinstance(given, dict) else {}
+    values = {k: v for k, v in dataclasses.asdict(params).items()
+              if k not in CONNECTIONS and v not in (None, "", [], ())}
+    dotted = ".".join(path)
+    if dotted in overrides:                               # the whole section given on the command line
+        base += " (--set)"
+    return {"group": name, "base": base, "values": values,
+            "set": {k: "--set" if f"{dotted}.{k}" in overrides else "scenario" for k in values if k in given}}
+
+
+def _vehicle_base(value) -> str:
+    """Where the vehicle's values come from: a preset, a parameter file or the defaults (the
+    paper's car)."""
+    from cosim.scenario.presets import VEHICLE_PRESETS
+    if isinstance(value, dict):
+        if value.get("file"):
+            return f"file {value['file']}"
+        value = value.get("preset")
+    if value is None:
+        return "defaults (paper_metro_car)"
+    return f"preset {value}" if value in VEHICLE_PRESETS else f"file {value}"
 
 
 def write_verdict(outcome: Outcome, out: Path) -> None:

@@ -63,7 +63,8 @@ def test_the_writer_keeps_the_csv_layout_and_the_values(twist, tmp_path):
     rows = list(csv.DictReader((tmp_path / "summary.csv").open()))
     assert len(rows) == 4 and float(rows[2]["dqq_max"]) == pytest.approx(outcome.rows[2]["dqq_max"], rel=1e-9)
     assert {p.name for p in tmp_path.glob("*.png")} == {
-        f"{f}_valves={v}.png" for f in ("fig8_wheel_loads", "dqq", "bellows") for v in ("on", "off")}
+        f"{f}_valves={v}.png" for f in ("fig8_wheel_loads", "dqq", "bellows") for v in ("on", "off")} | {
+        "twist_along_track.png"}
     assert (tmp_path / "run.json").exists()
 
 
