@@ -138,14 +138,13 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
                   content_sha256=hashlib.sha256(text.encode()).hexdigest(), overrides=tuple(overrides), raw=data,
                   allow=_allow(data.get("allow"), path))
     if not kind.car:
-        return kind.code.load(data, path, {**common, "files_sha256": _files_read(path, data)})
+        return kind.load(data, path, {**common, "files_sha256": _files_read(path, data)})
     return _car_scenario(kind, data, path, common)
 
 
 def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
     """A car scenario: the car (built once), its track, circuit and solver, the kind's section
-    (its module's ``parse``), and the rules between them."""
-    code = kind.code
+    (:meth:`~cosim.kinds.base.CarKind.parse`), and the rules between them."""
     vehicle = _vehicle(data.get("vehicle"), path)
     car = _check_car_builds(vehicle, data.get("vehicle"), path)
     track = _track_structure(data.get("track"), path)
@@ -153,8 +152,8 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
     solver = build(SolverSettings, data.get("solver"), path, ["solver"])
     if solver.coupling not in COUPLINGS:
         raise ScenarioError(path, ["solver", "coupling"], f"expected one of {', '.join(COUPLINGS)}, got {solver.coupling!r}")
-    experiment = code.parse(data.get(kind.section), vehicle, path)
-    valve_settings = code.valve_settings(experiment, circuit.valves)
+    experiment = kind.parse(data.get(kind.section), vehicle, path)
+    valve_settings = kind.valve_settings(experiment, circuit.valves)
     if circuit.explicit is not None:
         # an explicit circuit has no valves switch: its valves are what its components are
         given = (data.get(kind.section) or {}).get("valve_settings")
@@ -165,15 +164,15 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
                                                                         f"[{str(circuit.valves).lower()}]")
         valve_settings = (circuit.valves,)
         experiment = dataclasses.replace(experiment, valve_settings=valve_settings)
-    _check_steps(solver, code.duration_s(experiment), path)
-    shortest = getattr(code, "shortest_duration_s", code.duration_s)(experiment)   # every case sees every fault
+    _check_steps(solver, kind.duration_s(experiment), path)
+    shortest = kind.shortest_duration_s(experiment)   # every case sees every fault
     circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit, shortest,
                                                                valve_settings))
     check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
     state_limits = _state_limits(data.get("state_limits"), path)
     checks = parse_checks(data.get("checks", []), kind, experiment, path, common["k_W_per_K"], valve_settings)
-    extra = getattr(code, "extra_files", lambda experiment: ())(experiment)
+    extra = kind.extra_files(experiment)
     return Scenario(**common, files_sha256=_files_read(path, data, extra), experiment=experiment, circuit=circuit,
                     vehicle=vehicle, track=track, solver=solver, verify=verify, state_limits=state_limits,
                     checks=checks)

@@ -23,7 +23,7 @@ def run(scenario: Scenario, progress: Optional[Progress] = None) -> Outcome:
     carries its validity flags (:mod:`cosim.limits.validity`). Every warning of the run is in
     ``outcome.warnings`` (run.json) and logged once: a kind that only kept one has it logged here."""
     with _logged_warnings() as logged:
-        outcome = KINDS[scenario.kind].code.run(scenario, progress or Progress(scenario.name, quiet=True))
+        outcome = KINDS[scenario.kind].run(scenario, progress or Progress(scenario.name, quiet=True))
     outcome.interrupted = stop_requested()
     faults = _faults_label(scenario)
     if faults:                                    # every row says what failed
@@ -62,7 +62,7 @@ def run_scenario(scenario: Scenario, out_dir: Path, progress: Progress) -> Outco
     """Run ``scenario`` and write its results into ``out_dir``."""
     kind = KINDS[scenario.kind]
     outcome = run(scenario, progress)
-    figures = kind.code.figures(outcome)
+    figures = kind.figures(outcome)
     faults = _faults_label(scenario)
     for figure in figures if faults else ():     # every figure says what failed
         figure.title = f"{figure.title or ''}\nfaults: {faults}".lstrip("\n")

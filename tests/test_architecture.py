@@ -74,19 +74,18 @@ def test_no_module_outside_the_kinds_names_a_kind():
 
 
 def test_every_kind_declares_what_the_application_needs():
+    """Every registered kind is an instance of the contract's classes (abstract methods all
+    implemented, or it could not have been instantiated), registered under its own name, with
+    metrics that refer to its checkable ones and a zone list where it offers zone metrics."""
     from cosim.kinds import KINDS
-    for kind in KINDS.values():
-        code = kind.code
-        assert callable(code.run) and callable(code.figures), kind.name
-        if kind.car:
-            for hook in ("parse", "duration_s", "valve_settings", "make_car"):
-                assert callable(getattr(code, hook)), (kind.name, hook)
-            assert set(kind.wheel_metrics) <= set(kind.check_metrics), kind.name
-            assert set(kind.zone_metrics) <= set(kind.check_metrics), kind.name
-            assert not kind.zone_metrics or callable(code.zones), kind.name
-        else:
-            assert callable(code.load), kind.name
-        assert getattr(code, "KIND", None) is kind or kind in getattr(code, "KINDS", ()), kind.name
+    from cosim.kinds.base import CarKind, Kind, RigKind
+    for name, kind in KINDS.items():
+        assert isinstance(kind, Kind) and kind.name == name, name
+        assert isinstance(kind, CarKind if kind.car else RigKind), name
+        assert set(kind.wheel_metrics) <= set(kind.check_metrics), name
+        assert set(kind.zone_metrics) <= set(kind.check_metrics), name
+        assert not kind.zone_metrics or type(kind).zones is not Kind.zones, name
+        assert not kind.identify or type(kind).identify_circuit is not RigKind.identify_circuit, name
 
 
 @pytest.mark.parametrize("name", ["load_scenario", "run", "run_scenario", "Outcome", "ScenarioError"])

@@ -87,7 +87,7 @@ class RigModel:
         if others not in self._cache:
             scenario = self.base if not others else load_scenario(
                 self.scenario_file, [*self.overrides, *(f"{k}={v!r}" for k, v in others)])
-            comps, p0 = self.kind.code.identify_circuit(scenario)
+            comps, p0 = self.kind.identify_circuit(scenario)
             self._cache[others] = (comps, p0, scenario)
         comps, p0, _ = self._cache[others]
         return comps, p0

@@ -1,5 +1,6 @@
-"""The scenario kinds: one module each, declaring its experiment, how it is checked and run, what
-it draws, its metrics and what ``compare`` overlays (:class:`~cosim.kinds.base.Kind`).
+"""The scenario kinds: each a :class:`~cosim.kinds.base.Kind` subclass (its experiment, how it
+is checked and run, what it draws, its metrics and what ``compare`` overlays), an instance of which
+:data:`KINDS` holds.
 
 * :mod:`cosim.kinds.rig`: the bellow-tank test rig (paper §3): ``rig_ramp``, ``rig_sine``,
   ``rig_stiffness``, ``rig_table2``;
@@ -12,7 +13,9 @@ it draws, its metrics and what ``compare`` overlays (:class:`~cosim.kinds.base.K
   limits), for the kinds that run on a track;
 * :mod:`cosim.kinds.comfort`: the comfort indices of a car run's floor accelerations.
 
-A new kind is a module with a ``KIND`` (or ``KINDS``) and one line in :data:`KINDS` below.
+A new kind is a subclass of :class:`~cosim.kinds.base.CarKind` (or ``RigKind``) that implements
+``run`` (and what its section needs: ``parse``, ``duration_s``, ``make_car``), and its instance in
+:data:`KINDS` below.
 """
 from __future__ import annotations
 
@@ -27,7 +30,7 @@ KINDS: Dict[str, Kind] = {k.name: k for k in (*rig.KINDS, twist.KIND, curve_entr
 
 def overlays() -> Dict[str, Callable]:
     """kind name -> its ``compare`` (the kinds that have one): what ``pneumorail compare`` draws."""
-    return {name: kind.code.compare for name, kind in KINDS.items() if hasattr(kind.code, "compare")}
+    return {name: kind.compare for name, kind in KINDS.items() if kind.compares}
 
 
 __all__ = ["KINDS", "Kind", "overlays"]

@@ -1,43 +1,39 @@
-"""What a scenario kind is: :class:`Kind`, the declaration each kind module makes of itself.
+"""What a scenario kind is: a :class:`Kind` subclass, one instance of which the registry
+(:mod:`cosim.kinds`) holds.
 
-A kind module (``cosim/kinds/twist.py`` ...) holds everything about its kind: the experiment
-dataclass (its YAML section), how that section is checked, how the kind runs and what it draws,
-its checkable and headline metrics, what ``compare`` overlays, and (for the car kinds) how the car
-is built. It declares it in a :class:`Kind`; the registry (:mod:`cosim.kinds`) lists the kinds,
-and nothing else in the application layer names one.
+A kind declares, as class attributes, its name, its YAML section and the experiment dataclass that
+section builds, and the metrics it offers (checkable, per wheel, per zone, headline, plotted); it
+implements :meth:`Kind.run`, the one method every kind must have. Everything else has a default
+that a kind overrides where it differs: its figures, the checks and limits its experiment cannot
+give, the track's test zones, the files its scenario reads besides itself, and what ``compare``
+overlays. :class:`CarKind` adds what a co-simulated car run needs (its section parsed, how long it
+runs, its valve settings, the car it builds); :class:`RigKind` what a rig run needs (its whole
+scenario loaded; the circuit ``pneumorail identify`` drives).
 
-Functions a kind module provides (``Kind.module`` names it; imported when needed):
+The application layer asks the registry's instances; nothing is found by name on a module::
 
-* ``run(scenario, progress) -> Outcome`` and ``figures(outcome) -> [Figure]`` (every kind);
-* ``parse(data, vehicle, path) -> experiment``: the kind's section checked (car kinds; the rig
-  kinds load their whole scenario, ``load(data, path, common) -> Scenario``);
-* ``duration_s(experiment)``, ``valve_settings(experiment, valves)``: how long a car run lasts,
-  and its valve settings (``valves``: ``circuit.valves``);
-* ``make_car(scenario)``: the car of a car kind (a picklable module-level function);
-* ``shortest_duration_s(experiment)``: how long its shortest case runs, when its cases differ
-  (optional; the faults must happen within it);
-* ``zones(experiment) -> (zone, ...)``: the track's test zones (kinds with ``zone_metrics``);
-* ``refuse_check(metric, experiment) -> reason or None``: a checkable metric the scenario's
-  experiment cannot give (e.g. lateral wheel forces without wheel-rail contact);
-  ``refuse_limit(metric, op, limit, experiment) -> reason or None``: a limit it cannot decide
-  (e.g. a critical speed above the speeds it scans);
-* ``compare(infos, out_dir, select, label, window) -> [Path]``: overlays of several runs' time
-  series (optional: without it ``compare`` says the kind has none).
+    kind = KINDS[scenario.kind]
+    outcome = kind.run(scenario, progress)
+    figures = kind.figures(outcome)
 """
 from __future__ import annotations
 
-import sys
-from dataclasses import dataclass
-from types import ModuleType
-from typing import Tuple
+from abc import ABC, abstractmethod
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar, List, Mapping, Optional, Tuple
+
+if TYPE_CHECKING:                              # annotations only: the kinds import these rooms themselves
+    from cosim.results.io import Progress
+    from cosim.results.outcome import Outcome
+    from cosim.results.plots import Figure
+    from cosim.scenario.model import Scenario
 
 
-@dataclass(frozen=True)
-class Kind:
+class Kind(ABC):
     """A scenario kind.
 
-    Attributes
-    ----------
+    Class attributes
+    ----------------
     name : str
         ``kind:`` in the scenario file.
     section : str
@@ -45,18 +41,16 @@ class Kind:
         experiment is also ``scenario.<section>``.
     experiment : type
         The experiment dataclass the section builds.
-    module : str
-        The module that declares and runs it.
     car : bool
-        A car kind (``vehicle``, ``track``, ``circuit``, ``solver``, ``verify``,
-        ``state_limits``, ``checks``; co-simulated, verifiable) or a rig kind.
+        A car kind (:class:`CarKind`: ``vehicle``, ``track``, ``circuit``, ``solver``, ``verify``,
+        ``state_limits``, ``checks``; co-simulated, verifiable) or a rig kind (:class:`RigKind`).
     check_metrics : tuple of str
         The metrics ``checks:`` may name (each the largest over the selected cases).
     wheel_metrics : tuple of str
         Those of them that can name a wheel (``dqq_max[3R]``).
     zone_metrics : tuple of str
-        Those of them that can name a test zone of the track (``yq_2m_p9985[zone=R<250]``); the
-        module's ``zones(experiment)`` lists the zones its track has.
+        Those of them that can name a test zone of the track (``yq_2m_p9985[zone=R<250]``);
+        :meth:`zones` lists the zones a scenario's track has.
     headline_metrics : tuple of str
         The summary columns ``verify`` estimates the discretisation error of.
     plot_metrics : tuple of str
@@ -68,25 +62,101 @@ class Kind:
         and ``sweep.nc`` takes as dimensions (those present in the rows).
     identify : str
         What ``pneumorail identify`` fits its scenarios to: ``time`` (a rig's time history) or
-        ``table`` (a dynamic-stiffness table); empty: not identifiable. Such a kind's module
-        provides ``identify_circuit(scenario) -> (components, initial pressures)``.
+        ``table`` (a dynamic-stiffness table); empty: not identifiable (see
+        :meth:`RigKind.identify_circuit`).
     """
 
-    name: str
-    section: str
-    experiment: type
-    module: str
-    car: bool = False
-    check_metrics: Tuple[str, ...] = ()
-    wheel_metrics: Tuple[str, ...] = ()
-    zone_metrics: Tuple[str, ...] = ()
-    headline_metrics: Tuple[str, ...] = ()
-    plot_metrics: Tuple[str, ...] = ()
-    k_fixed: str = ""
-    case_columns: Tuple[str, ...] = ("valves", "k_W_per_K")
-    identify: str = ""
+    name: ClassVar[str]
+    section: ClassVar[str]
+    experiment: ClassVar[type]
+    car: ClassVar[bool] = False
+    check_metrics: ClassVar[Tuple[str, ...]] = ()
+    wheel_metrics: ClassVar[Tuple[str, ...]] = ()
+    zone_metrics: ClassVar[Tuple[str, ...]] = ()
+    headline_metrics: ClassVar[Tuple[str, ...]] = ()
+    plot_metrics: ClassVar[Tuple[str, ...]] = ()
+    k_fixed: ClassVar[str] = ""
+    case_columns: ClassVar[Tuple[str, ...]] = ("valves", "k_W_per_K")
+    identify: ClassVar[str] = ""
 
+    @abstractmethod
+    def run(self, scenario: "Scenario", progress: "Progress") -> "Outcome":
+        """Compute the scenario (nothing written): its :class:`~cosim.results.outcome.Outcome`."""
+
+    def figures(self, outcome: "Outcome") -> List["Figure"]:
+        """The figures of a run (default: none; its numbers are the summary)."""
+        return []
+
+    def refuse_check(self, metric: str, experiment: Any) -> Optional[str]:
+        """Why the experiment cannot give ``metric`` (e.g. lateral wheel forces without wheel-rail
+        contact); None: it can."""
+        return None
+
+    def refuse_limit(self, metric: str, op: str, limit: float, experiment: Any) -> Optional[str]:
+        """Why the experiment cannot decide this limit (e.g. a critical speed above the speeds it
+        scans); None: it can."""
+        return None
+
+    def zones(self, experiment: Any) -> Tuple[str, ...]:
+        """The test zones of the experiment's track (kinds with ``zone_metrics``)."""
+        return ()
+
+    def extra_files(self, experiment: Any) -> Tuple[Path, ...]:
+        """The files the experiment reads besides the scenario (hashed into the provenance)."""
+        return ()
+
+    #: whether :meth:`compare` overlays this kind's runs
     @property
-    def code(self) -> ModuleType:
-        """The module that declares and runs the kind (imported: it made this declaration)."""
-        return sys.modules[self.module]
+    def compares(self) -> bool:
+        return type(self).compare is not Kind.compare
+
+    def compare(self, infos, out_dir: Path, select, label, window: str) -> List[Path]:
+        """Overlays of several runs' results (``pneumorail compare``): the figures' paths."""
+        raise NotImplementedError(f"{self.name} runs have no overlays")
+
+    def __repr__(self) -> str:
+        return f"<kind {self.name}>"
+
+
+class CarKind(Kind):
+    """A kind that co-simulates the car with its circuit (a section of its own beside
+    ``vehicle``, ``track``, ``circuit``, ``solver``, ...)."""
+
+    car = True
+
+    @abstractmethod
+    def parse(self, data: Any, vehicle, path: Path) -> Any:
+        """The kind's section checked: its experiment (``vehicle``: the scenario's car parameters)."""
+
+    @abstractmethod
+    def duration_s(self, experiment: Any) -> float:
+        """How long its longest run lasts [s] (the steps are checked against it)."""
+
+    def shortest_duration_s(self, experiment: Any) -> float:
+        """How long its shortest run lasts [s]: every fault must happen within it."""
+        return self.duration_s(experiment)
+
+    def valve_settings(self, experiment: Any, valves: bool) -> Tuple[bool, ...]:
+        """The valve settings its cases run with (``valves``: ``circuit.valves``)."""
+        return experiment.valve_settings
+
+    @abstractmethod
+    def make_car(self, scenario: "Scenario"):
+        """The car of a run, with the :class:`vehicle.car.MetroCar` interface (a bound method of
+        the registry's instance: picklable, for the worker processes)."""
+
+
+class RigKind(Kind):
+    """A kind that runs the bellow-tank test rig alone (``circuit`` and ``test`` sections)."""
+
+    section = "test"
+
+    @abstractmethod
+    def load(self, data: Mapping, path: Path, common: Mapping) -> "Scenario":
+        """The whole scenario from its checked top level (``common``: the fields every scenario
+        has)."""
+
+    def identify_circuit(self, scenario: "Scenario"):
+        """(components, initial pressures) of the rig ``pneumorail identify`` drives (kinds with
+        ``identify``)."""
+        raise NotImplementedError(f"{self.name} scenarios are not identifiable")

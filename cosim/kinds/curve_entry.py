@@ -17,7 +17,7 @@ import xarray as xr
 
 from cosim.errors import ScenarioError
 from cosim.kinds import en14363
-from cosim.kinds.base import Kind
+from cosim.kinds.base import CarKind
 from cosim.kinds.car import (
     add_wheel_unloading,
     air_columns,
@@ -892,23 +892,40 @@ def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List
     return [save_panels(out_dir / "compare_curve.png", panels, f"Curve entry comparison{window}", ncols=2)]
 
 
-KIND = Kind("curve_entry", "curve", CurveTest, __name__, car=True,
-            check_metrics=("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "air_lost_kg", "yq_max", "sum_y_max",
-                           "dqq_raw_max",
-                           "dqq_2m_max", "sum_y_rms_max", *en14363.METRICS),
-            wheel_metrics=("dqq_raw_max", "yq_max", "dqq_2m_max",
-                           *(m for m, (q, _, _) in en14363.METRICS.items() if en14363.QUANTITIES.get(q, ("", ""))[1] == "wheel")),
-            zone_metrics=tuple(en14363.METRICS),
-            # the processed quantities an engineer is judged by: EN 14363's statistics of the 2 m
-            # means along the track (cosim.kinds.en14363), the roll (largest, and its mean over the
-            # final window), the air; not the raw sampled peaks (dqq_raw_max, Y_raw_max_N: one sample
-            # of a transient the step may not resolve); a column that is absent (yq_2m_p9985 and
-            # sum_y_2m_p9985_N without contact, Y_2m_p50_N without an arc R < 600 m) is skipped; the
-            # carbody accelerations by their rms: their largest filtered value is one output sample
-            # (checkable, in the summary and the report, but a single sample; on curve_canted it is
-            # 0.53 % from its Richardson estimate, and the sampling at the output interval can miss a
-            # 10 Hz peak by more)
-            headline_metrics=("roll_max_rad", "roll_end_rad", "roll_mean_end_rad", "air_injected_kg",
-                              "air_exhausted_kg", "dqq_2m_p9985", "Q_2m_p9985_N", "Q_2m_p50_N", "Y_2m_p50_N",
-                              "yq_2m_p9985", "sum_y_2m_p9985_N", "ay_floor_rms_m_per_s2", "az_floor_rms_m_per_s2"),
-            plot_metrics=("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg"))
+class CurveEntryKind(CarKind):
+    """A run into a curve (paper §4.2)."""
+
+    name, section, experiment = "curve_entry", "curve", CurveTest
+    check_metrics = ("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "air_lost_kg", "yq_max", "sum_y_max",
+                     "dqq_raw_max",
+                     "dqq_2m_max", "sum_y_rms_max", *en14363.METRICS)
+    wheel_metrics = ("dqq_raw_max", "yq_max", "dqq_2m_max",
+                     *(m for m, (q, _, _) in en14363.METRICS.items() if en14363.QUANTITIES.get(q, ("", ""))[1] == "wheel"))
+    zone_metrics = tuple(en14363.METRICS)
+    # the processed quantities an engineer is judged by: EN 14363's statistics of the 2 m
+    # means along the track (cosim.kinds.en14363), the roll (largest, and its mean over the
+    # final window), the air; not the raw sampled peaks (dqq_raw_max, Y_raw_max_N: one sample
+    # of a transient the step may not resolve); a column that is absent (yq_2m_p9985 and
+    # sum_y_2m_p9985_N without contact, Y_2m_p50_N without an arc R < 600 m) is skipped; the
+    # carbody accelerations by their rms: their largest filtered value is one output sample
+    # (checkable, in the summary and the report, but a single sample; on curve_canted it is
+    # 0.53 % from its Richardson estimate, and the sampling at the output interval can miss a
+    # 10 Hz peak by more)
+    headline_metrics = ("roll_max_rad", "roll_end_rad", "roll_mean_end_rad", "air_injected_kg",
+                        "air_exhausted_kg", "dqq_2m_p9985", "Q_2m_p9985_N", "Q_2m_p50_N", "Y_2m_p50_N",
+                        "yq_2m_p9985", "sum_y_2m_p9985_N", "ay_floor_rms_m_per_s2", "az_floor_rms_m_per_s2")
+    plot_metrics = ("roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg")
+
+    parse = staticmethod(parse)
+    duration_s = staticmethod(duration_s)
+    valve_settings = staticmethod(valve_settings)
+    extra_files = staticmethod(extra_files)
+    refuse_check = staticmethod(refuse_check)
+    zones = staticmethod(zones)
+    make_car = staticmethod(make_car)
+    run = staticmethod(run)
+    figures = staticmethod(figures)
+    compare = staticmethod(compare)
+
+
+KIND = CurveEntryKind()

@@ -21,7 +21,7 @@ import numpy as np
 
 from cosim.errors import ScenarioError
 from cosim.kinds import curve_entry
-from cosim.kinds.base import Kind
+from cosim.kinds.base import CarKind
 from cosim.kinds.car import fault_columns
 from cosim.kinds.comfort import COLUMNS, comfort_columns
 from cosim.kinds.curve_entry import MAX_SPEED_M_PER_S, CurveTest, IrregularitySpec, parse_irregularity
@@ -281,11 +281,27 @@ def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List
     return [save_panels(out_dir / "compare_ride.png", panels, f"Ride comfort comparison{window}", ncols=3)]
 
 
-KIND = Kind("ride", "ride", RideTest, __name__, car=True,
-            check_metrics=tuple(c.format(p) for c in COLUMNS for p in FLOOR_POINTS),
-            # the comfort indices over the record; roll and air as in a curve run
-            # the indices over the record; the Cc maxima are in the summary and checkable
-            headline_metrics=(*(c.format(p) for c in COLUMNS[:3] for p in FLOOR_POINTS), "roll_max_rad", "air_injected_kg"),
-            plot_metrics=("N_MV_centre", "Wz_y_centre", "Wz_z_centre"),
-            # a case is a speed as well as a k value and valve setting
-            case_columns=("speed_m_per_s", "valves", "k_W_per_K"))
+class RideKind(CarKind):
+    """Ride comfort on irregular track at a list of speeds."""
+
+    name, section, experiment = "ride", "ride", RideTest
+    check_metrics = tuple(c.format(p) for c in COLUMNS for p in FLOOR_POINTS)
+    # the comfort indices over the record; roll and air as in a curve run
+    # the indices over the record; the Cc maxima are in the summary and checkable
+    headline_metrics = (*(c.format(p) for c in COLUMNS[:3] for p in FLOOR_POINTS), "roll_max_rad", "air_injected_kg")
+    plot_metrics = ("N_MV_centre", "Wz_y_centre", "Wz_z_centre")
+    # a case is a speed as well as a k value and valve setting
+    case_columns = ("speed_m_per_s", "valves", "k_W_per_K")
+
+    parse = staticmethod(parse)
+    duration_s = staticmethod(duration_s)
+    shortest_duration_s = staticmethod(shortest_duration_s)
+    valve_settings = staticmethod(valve_settings)
+    extra_files = staticmethod(extra_files)
+    make_car = staticmethod(make_car)
+    run = staticmethod(run)
+    figures = staticmethod(figures)
+    compare = staticmethod(compare)
+
+
+KIND = RideKind()

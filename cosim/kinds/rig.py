@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from cosim.errors import ScenarioError
-from cosim.kinds.base import Kind
+from cosim.kinds.base import RigKind
 from cosim.results.io import Progress, read_rows
 from cosim.results.outcome import Outcome
 from cosim.results.overlay import Selection, case_series
@@ -111,31 +111,19 @@ class RigCircuit:
         return {n: self.p0_Pa for n, c in components.items() if isinstance(c, (Bellow, Tank))}
 
 
-def identify_circuit(scenario: Scenario):
+def identify_circuit(scenario: Scenario, with_tank: bool = True):
     """(components, initial pressures) of the rig ``pneumorail identify`` drives: with the tank
-    when the scenario has one (a ramp scenario: as its first configuration says)."""
+    when the scenario has one and ``with_tank``."""
     rig = scenario.circuit
-    with_tank = rig.tank is not None and (scenario.kind != "rig_ramp" or scenario.test.configurations[0] == "bellow_tank")
-    comps = rig.components(with_tank)
+    comps = rig.components(with_tank and rig.tank is not None)
     return comps, rig.initial_pressures(comps)
 
 
-# ----------------------------------------------------------------------------------- the kinds
-KINDS = (
-    Kind("rig_ramp", "test", RampTest, __name__, identify="time"),
-    Kind("rig_sine", "test", SineTest, __name__, identify="time"),
-    Kind("rig_stiffness", "test", StiffnessTest, __name__, identify="table"),
-    Kind("rig_table2", "test", QuasiStaticTest, __name__,
-         k_fixed="Table 2 is computed for the adiabatic and isothermal limits"),
-)
-_EXPERIMENT = {k.name: k.experiment for k in KINDS}
-
-
-def load(data: Mapping, path, common: Mapping) -> Scenario:
+def load(data: Mapping, path, common: Mapping, experiment: type) -> Scenario:
     """A rig scenario from its checked top level (``common``: the fields every scenario has):
-    the ``circuit`` and the ``test`` of its kind, and the rules between them."""
+    the ``circuit`` and the ``test`` (an ``experiment``), and the rules between them."""
     rig = _rig_circuit(require(data, "circuit", path, [], dict), path)
-    test = build(_EXPERIMENT[common["kind"]], data.get("test"), path, ["test"])
+    test = build(experiment, data.get("test"), path, ["test"])
     _check_rig_test(test, rig, path)
     return Scenario(**common, experiment=test, circuit=rig)
 
@@ -187,11 +175,11 @@ def _rig_circuit(data: Mapping, file) -> RigCircuit:
     return rig
 
 
-def run(scenario: Scenario, progress: Progress) -> Outcome:
-    """A rig scenario: its summary rows, a time series per run and the diagnoses of early stops."""
+def run(scenario: Scenario, progress: Progress, stage) -> Outcome:
+    """A rig scenario: its summary rows and a time series per run from ``stage`` (a kind's
+    ``(scenario, progress, diagnoses) -> (rows, series)``), and the diagnoses of early stops."""
     t0 = time.perf_counter()
     diagnoses: List[str] = []
-    stage = {"rig_ramp": _ramp, "rig_sine": _sine, "rig_stiffness": _stiffness, "rig_table2": _table2}[scenario.kind]
     rows, series = stage(scenario, progress, diagnoses)
     return Outcome(scenario, rows, series=series, diagnoses=diagnoses, wall_s=time.perf_counter() - t0)
 
@@ -383,10 +371,6 @@ def _spans_decades(curves) -> bool:
     return bool(values) and max(values) > 10 * min(values)
 
 
-def _no_figures(outcome: Outcome) -> List[Figure]:
-    return []
-
-
 def _table2(scenario: Scenario, progress: Progress, diagnoses: List[str]):
     rig, test = scenario.circuit, scenario.test
     progress("quasi-static stiffness (Table 2)")
@@ -396,36 +380,97 @@ def _table2(scenario: Scenario, progress: Progress, diagnoses: List[str]):
              "relative_difference": r.simulated_N_per_m / r.analytic_N_per_m - 1.0} for r in table], {}
 
 
-def figures(outcome: Outcome) -> List[Figure]:
-    """The figures of a rig run (Table 2 has none: its numbers are the summary)."""
-    return {"rig_ramp": _ramp_figures, "rig_sine": _sine_figures, "rig_stiffness": _stiffness_figures,
-            "rig_table2": _no_figures}[outcome.scenario.kind](outcome)
+def compare_stiffness(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+    """Overlay several stiffness runs: the dynamic stiffness against frequency (the stabilised
+    points)."""
+    curves = []
+    for d, _ in infos:
+        rows = [r for r in read_rows(d / "summary.csv") if r["stabilised"] == "True"]
+        for k in sorted({float(r["k_W_per_K"]) for r in rows}):
+            if select.k is not None and k not in select.k:
+                continue
+            pts = [r for r in rows if float(r["k_W_per_K"]) == k]
+            curves.append(Curve([float(r["frequency_Hz"]) for r in pts],
+                                [float(r["K_dyn_N_per_m"]) / 1e3 for r in pts], label(d, f"k = {k_label(k)}"), "o-"))
+    return [save_panels(out_dir / "compare_stiffness.png",
+                        [Panel(curves, "frequency f [Hz]", "K_dyn [kN/m]", logx=True)], "Dynamic stiffness comparison")]
 
 
-#: what ``compare`` overlays of the rig's time series: kind -> (file prefix, column, axis label)
-OVERLAID = {"rig_ramp": ("ramp_", "F_bellow_N", "bellow force F [N]"),
-            "rig_sine": ("sine_", "T_bellow_K", "bellow temperature T [K]")}
-
-
-def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
-    """Overlay several rig runs of one kind: the dynamic stiffness against frequency (the
-    stabilised points), the ramp's bellow force or the sine's bellow temperature against time."""
-    kind = infos[0][1]["kind"]
-    if kind == "rig_stiffness":
-        curves = []
-        for d, _ in infos:
-            rows = [r for r in read_rows(d / "summary.csv") if r["stabilised"] == "True"]
-            for k in sorted({float(r["k_W_per_K"]) for r in rows}):
-                if select.k is not None and k not in select.k:
-                    continue
-                pts = [r for r in rows if float(r["k_W_per_K"]) == k]
-                curves.append(Curve([float(r["frequency_Hz"]) for r in pts],
-                                    [float(r["K_dyn_N_per_m"]) / 1e3 for r in pts], label(d, f"k = {k_label(k)}"), "o-"))
-        return [save_panels(out_dir / "compare_stiffness.png",
-                            [Panel(curves, "frequency f [Hz]", "K_dyn [kN/m]", logx=True)], "Dynamic stiffness comparison")]
-    if kind not in OVERLAID:
-        raise ScenarioError(infos[0][0], ["kind"], f"compare does not support {kind!r} runs (summary.csv holds its numbers)")
-    prefix, column, ylabel = OVERLAID[kind]
+def compare_time_series(infos, out_dir: Path, select: Selection, label, window: str, kind: str, prefix: str,
+                        column: str, ylabel: str) -> List[Path]:
+    """Overlay several runs' time series ``<prefix>*.csv``: ``column`` against time."""
     curves = [Curve(data["t_s"], data[column], label(d, k)) for d, _ in infos for k, data in case_series(d, prefix, select)]
     return [save_panels(out_dir / f"compare_{kind}.png", [Panel(curves, "time t [s]", ylabel)],
                         f"{kind} comparison{window}")]
+
+
+# ----------------------------------------------------------------------------------- the kinds
+class _Rig(RigKind):
+    """What the four rig kinds share: the rig circuit and a ``test``; each kind's ``stage``
+    (``(scenario, progress, diagnoses) -> (rows, series)``) computes its rows."""
+
+    def load(self, data: Mapping, path: Path, common: Mapping) -> Scenario:
+        return load(data, path, common, self.experiment)
+
+    def run(self, scenario: Scenario, progress: Progress) -> Outcome:
+        return run(scenario, progress, self.stage)
+
+    def identify_circuit(self, scenario: Scenario):
+        return identify_circuit(scenario)
+
+
+class RampKind(_Rig):
+    """A slow crushing ramp, each configuration (bellow with and without tank) per k (Fig. 3)."""
+
+    name, experiment, identify = "rig_ramp", RampTest, "time"
+    stage = staticmethod(_ramp)
+
+    def figures(self, outcome: Outcome) -> List[Figure]:
+        return _ramp_figures(outcome)
+
+    def identify_circuit(self, scenario: Scenario):
+        """With the tank as the first configuration says."""
+        return identify_circuit(scenario, scenario.test.configurations[0] == "bellow_tank")
+
+    def compare(self, infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+        return compare_time_series(infos, out_dir, select, label, window, self.name, "ramp_", "F_bellow_N",
+                                   "bellow force F [N]")
+
+
+class SineKind(_Rig):
+    """A sine crushing at one frequency, per k (Fig. 5)."""
+
+    name, experiment, identify = "rig_sine", SineTest, "time"
+    stage = staticmethod(_sine)
+
+    def figures(self, outcome: Outcome) -> List[Figure]:
+        return _sine_figures(outcome)
+
+    def compare(self, infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+        return compare_time_series(infos, out_dir, select, label, window, self.name, "sine_", "T_bellow_K",
+                                   "bellow temperature T [K]")
+
+
+class StiffnessKind(_Rig):
+    """The dynamic stiffness against frequency, per k (Fig. 6)."""
+
+    name, experiment, identify = "rig_stiffness", StiffnessTest, "table"
+    stage = staticmethod(_stiffness)
+
+    def figures(self, outcome: Outcome) -> List[Figure]:
+        return _stiffness_figures(outcome)
+
+    def compare(self, infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+        return compare_stiffness(infos, out_dir, select, label, window)
+
+
+class Table2Kind(_Rig):
+    """The quasi-static stiffness, analytic and simulated (Table 2; no figures: its numbers are
+    the summary)."""
+
+    name, experiment = "rig_table2", QuasiStaticTest
+    stage = staticmethod(_table2)
+    k_fixed = "Table 2 is computed for the adiabatic and isothermal limits"
+
+
+KINDS = (RampKind(), SineKind(), StiffnessKind(), Table2Kind())

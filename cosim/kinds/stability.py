@@ -32,7 +32,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from cosim.errors import ScenarioError
-from cosim.kinds.base import Kind
+from cosim.kinds.base import CarKind
 from cosim.limits.checks import CaseMetrics
 from cosim.results.io import Progress, atomic_write
 from cosim.results.outcome import Outcome, warn
@@ -631,12 +631,29 @@ def _bifurcation_figures(outcome: Outcome) -> List[Figure]:
     return out
 
 
-KIND = Kind("stability", "stability", StabilityTest, __name__, car=True,
-            check_metrics=("critical_speed_m_per_s", "linear_critical_speed_m_per_s",
-                           "nonlinear_critical_speed_m_per_s", "min_damping_ratio"),
-            # the time-domain results move with the steps: verify estimates them too
-            headline_metrics=("critical_speed_m_per_s", "linear_critical_speed_m_per_s",
-                              "nonlinear_critical_speed_m_per_s", "min_damping_ratio", "nonlinear_onset_m_per_s",
-                              "limit_cycle_ends_m_per_s"),
-            plot_metrics=("critical_speed_m_per_s", "min_damping_ratio"),
-            case_columns=("airspring", "valves", "k_W_per_K"))
+class StabilityKind(CarKind):
+    """Running stability: linear, brute force, ramp-down."""
+
+    name, section, experiment = "stability", "stability", StabilityTest
+    check_metrics = ("critical_speed_m_per_s", "linear_critical_speed_m_per_s",
+                     "nonlinear_critical_speed_m_per_s", "min_damping_ratio")
+    # the time-domain results move with the steps: verify estimates them too
+    headline_metrics = ("critical_speed_m_per_s", "linear_critical_speed_m_per_s",
+                        "nonlinear_critical_speed_m_per_s", "min_damping_ratio", "nonlinear_onset_m_per_s",
+                        "limit_cycle_ends_m_per_s")
+    plot_metrics = ("critical_speed_m_per_s", "min_damping_ratio")
+    case_columns = ("airspring", "valves", "k_W_per_K")
+
+    parse = staticmethod(parse)
+    duration_s = staticmethod(duration_s)
+    shortest_duration_s = staticmethod(shortest_duration_s)
+    valve_settings = staticmethod(valve_settings)
+    extra_files = staticmethod(extra_files)
+    refuse_check = staticmethod(refuse_check)
+    refuse_limit = staticmethod(refuse_limit)
+    make_car = staticmethod(make_car)
+    run = staticmethod(run)
+    figures = staticmethod(figures)
+
+
+KIND = StabilityKind()

@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from cosim.errors import ScenarioError
-from cosim.kinds.base import Kind
+from cosim.kinds.base import CarKind
 from cosim.kinds.car import (
     add_wheel_unloading,
     air_columns,
@@ -435,9 +435,23 @@ def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List
     return written
 
 
-KIND = Kind("twist", "twist", TwistTest, __name__, car=True,
-            check_metrics=("dqq_max", "dqq_qs_max", "dqq_drift"),
-            wheel_metrics=("dqq_max", "dqq_qs_max", "dqq_drift"),
-            # the dynamic and quasi-static unloading, largest and per wheel
-            headline_metrics=("dqq_max", "dqq_qs_max", *(f"dqq_max_{w}" for w in WHEELS), *(f"dqq_qs_{w}" for w in WHEELS)),
-            plot_metrics=("dqq_max", "dqq_qs_max"))
+class TwistKind(CarKind):
+    """The EN 14363 twist test (paper §4.1)."""
+
+    name, section, experiment = "twist", "twist", TwistTest
+    check_metrics = ("dqq_max", "dqq_qs_max", "dqq_drift")
+    wheel_metrics = ("dqq_max", "dqq_qs_max", "dqq_drift")
+    # the dynamic and quasi-static unloading, largest and per wheel
+    headline_metrics = ("dqq_max", "dqq_qs_max", *(f"dqq_max_{w}" for w in WHEELS), *(f"dqq_qs_{w}" for w in WHEELS))
+    plot_metrics = ("dqq_max", "dqq_qs_max")
+
+    parse = staticmethod(parse)
+    duration_s = staticmethod(duration_s)
+    valve_settings = staticmethod(valve_settings)
+    make_car = staticmethod(make_car)
+    run = staticmethod(run)
+    figures = staticmethod(figures)
+    compare = staticmethod(compare)
+
+
+KIND = TwistKind()

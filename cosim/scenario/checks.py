@@ -72,8 +72,7 @@ def parse_checks(value, kind, experiment, file, k_values: Sequence[float] = (),
     its module's ``refuse_check(metric, experiment)`` refuses a metric the experiment cannot give,
     e.g. lateral wheel forces without wheel-rail contact, and ``refuse_limit(metric, op, limit,
     experiment)`` a limit it cannot decide, e.g. a critical speed above the speeds it scans)."""
-    refuse = getattr(kind.code, "refuse_check", lambda metric, experiment: None)
-    refuse_limit = getattr(kind.code, "refuse_limit", lambda metric, op, limit, experiment: None)
+    refuse, refuse_limit = kind.refuse_check, kind.refuse_limit
     if not isinstance(value, list):
         raise ScenarioError(file, ["checks"], f"expected a list like ['dqq_max <= 0.6'], got {type(value).__name__}")
     out = []
@@ -121,7 +120,7 @@ def parse_checks(value, kind, experiment, file, k_values: Sequence[float] = (),
                 if metric not in kind.zone_metrics:
                     raise ScenarioError(file, where, f"{metric} is not assessed per test zone: no zone selector "
                                                      f"(per zone: {', '.join(kind.zone_metrics) or 'none'})")
-                present = kind.code.zones(experiment)
+                present = kind.zones(experiment)
                 if zone not in present:
                     raise ScenarioError(file, where, f"zone {zone!r} is not a test zone of this track (its zones: "
                                                      f"{', '.join(present)})")

@@ -97,7 +97,7 @@ def _make_car(scenario: Scenario):
     kind = KINDS[scenario.kind]
     if not kind.car:
         raise ValueError(f"the monolithic reference runs car scenarios, not {scenario.kind!r}")
-    return kind.code.make_car
+    return kind.make_car
 
 
 def state_scale(circuit) -> np.ndarray:

@@ -138,8 +138,8 @@ def test_every_warning_of_a_run_is_printed_once_and_kept(tmp_path, capsys, monke
     are in run.json either way."""
     from cosim.kinds import KINDS
     from cosim.results.outcome import warn
-    module = KINDS["rig_table2"].code
-    original = module.run
+    kind = KINDS["rig_table2"]
+    original = kind.run
 
     def run_with_warnings(scenario, progress):
         outcome = original(scenario, progress)
@@ -147,7 +147,7 @@ def test_every_warning_of_a_run_is_printed_once_and_kept(tmp_path, capsys, monke
         warn(outcome.warnings, "kept and logged")
         return outcome
 
-    monkeypatch.setattr(module, "run", run_with_warnings)
+    monkeypatch.setattr(kind, "run", run_with_warnings)
     out = tmp_path / "out"
     argv = ["run", str(SCENARIOS / "rig_table2.yaml"), "--out", str(out)] + (["--quiet"] if quiet else [])
     assert cli.main(argv) == cli.EXIT_OK
