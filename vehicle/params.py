@@ -41,6 +41,8 @@ from dataclasses import dataclass
 BELLOWS = ("FL", "FR", "RL", "RR")
 #: Wheels: wheelset 1..4 from the front, left/right in the running direction.
 WHEELS = ("1L", "1R", "2L", "2R", "3L", "3R", "4L", "4R")
+#: wheelsets, "1" ... "4" from the front (from the wheel names)
+WHEELSETS = tuple(dict.fromkeys(wheel[:-1] for wheel in WHEELS))
 #: Floor points where the carbody's accelerations are measured: above the front bogie centre, at
 #: the car centre, above the rear bogie centre (at ``floor_height_m``; EN 12299's positions).
 FLOOR_POINTS = ("front", "centre", "rear")

@@ -8,10 +8,10 @@ is checked and run, what it draws, its metrics and what ``compare`` overlays), a
 * :mod:`cosim.kinds.curve_entry`: a run into a curve (paper §4.2): ``curve_entry``;
 * :mod:`cosim.kinds.ride`: ride comfort on irregular track at a list of speeds: ``ride``;
 * :mod:`cosim.kinds.stability`: linear running stability (eigenvalues, critical speed): ``stability``;
-* :mod:`cosim.kinds.car`: what the car kinds share (the co-simulated cases, their Dataset);
-* :mod:`cosim.kinds.en14363`: the EN 14363 assessment of a car run on track (zones, statistics,
-  limits), for the kinds that run on a track;
-* :mod:`cosim.kinds.comfort`: the comfort indices of a car run's floor accelerations.
+* :mod:`cosim.kinds.car`: what the car kinds share (the co-simulated cases, their Dataset).
+
+The EN 14363 assessment of a run on track and the comfort columns of a car run are criteria, in
+:mod:`cosim.limits.en14363` and :mod:`cosim.limits.ride_comfort`.
 
 A new kind is a subclass of :class:`~cosim.kinds.base.CarKind` (or ``RigKind``) that implements
 ``run`` (and what its section needs: ``parse``, ``duration_s``, ``make_car``), and its instance in

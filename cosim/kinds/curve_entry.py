@@ -16,7 +16,6 @@ import numpy as np
 import xarray as xr
 
 from cosim.errors import ScenarioError
-from cosim.kinds import en14363
 from cosim.kinds.base import CarKind
 from cosim.kinds.car import (
     add_wheel_unloading,
@@ -28,7 +27,7 @@ from cosim.kinds.car import (
     per_case,
     simulate_scenarios,
 )
-from cosim.kinds.comfort import comfort_columns
+from cosim.limits import en14363
 from cosim.limits.assessment import STEP_M
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import (
@@ -40,6 +39,7 @@ from cosim.limits.criteria import (
     sliding_mean,
     window_mean,
 )
+from cosim.limits.ride_comfort import comfort_columns
 from cosim.results.io import Progress, read_rows
 from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection, case_series
@@ -579,7 +579,7 @@ def ramp_roll_rate_step_rad_per_s(curve: CurveTest) -> float:
 def case_metrics(row: Dict[str, object], zoned: Dict[str, Dict[str, Dict[str, float]]]) -> CaseMetrics:
     """The checkable metrics of a summary row (:attr:`KIND.check_metrics <cosim.kinds.base.Kind.check_metrics>`): the wheel
     metrics per wheel; ``yq_max`` and ``sum_y_max`` [N] only with contact guidance; the EN 14363
-    assessment's per zone and wheel (``zoned``, :func:`cosim.kinds.en14363.zone_metrics`)."""
+    assessment's per zone and wheel (``zoned``, :func:`cosim.limits.en14363.zone_metrics`)."""
     values = {m: row[m] for m in ("roll_max_rad", "air_injected_kg", "air_exhausted_kg", "air_lost_kg")}
     wheels = {m: {w: row[f"{m}_{w}"] for w in WHEELS} for m in ("dqq_raw_max", "dqq_2m_max")}
     if "sum_y_rms_max_N" in row:
@@ -768,7 +768,7 @@ def track_axis(scenario: Scenario, t_s: np.ndarray) -> TrackAxis:
 
 def track_spans(track: TrackGeometry) -> Tuple[Span, ...]:
     """The track's segments as spans of a position axis: straights unshaded, transitions and arcs
-    shaded, each named with its EN 14363 test zone (:func:`cosim.kinds.en14363.zone_table`)."""
+    shaded, each named with its EN 14363 test zone (:func:`cosim.limits.en14363.zone_table`)."""
     starts, zones, _ = en14363.zone_table(track)
     ends = [*starts[1:], track.total_length_m]
     spans = []
@@ -903,7 +903,7 @@ class CurveEntryKind(CarKind):
                      *(m for m, (q, _, _) in en14363.METRICS.items() if en14363.QUANTITIES.get(q, ("", ""))[1] == "wheel"))
     zone_metrics = tuple(en14363.METRICS)
     # the processed quantities an engineer is judged by: EN 14363's statistics of the 2 m
-    # means along the track (cosim.kinds.en14363), the roll (largest, and its mean over the
+    # means along the track (cosim.limits.en14363), the roll (largest, and its mean over the
     # final window), the air; not the raw sampled peaks (dqq_raw_max, Y_raw_max_N: one sample
     # of a transient the step may not resolve); a column that is absent (yq_2m_p9985 and
     # sum_y_2m_p9985_N without contact, Y_2m_p50_N without an arc R < 600 m) is skipped; the

@@ -1,7 +1,7 @@
 """Ride comfort on irregular track (EN 12299): the car with wheel-rail contact at a list of speeds,
 on straight track or in a curve, over seeded irregularities, across k and valve settings. Per case
 (speed x k x valve setting) the comfort indices at each floor point over the record
-(:mod:`cosim.kinds.comfort`), and figures of comfort against speed and of the floor accelerations'
+(:mod:`cosim.limits.ride_comfort`), and figures of comfort against speed and of the floor accelerations'
 power spectra. Kind ``ride``, section ``ride`` (:class:`RideTest`).
 
 Each speed is a run along a track built for it (:func:`curve_at`): the car starts at rest on design
@@ -23,9 +23,9 @@ from cosim.errors import ScenarioError
 from cosim.kinds import curve_entry
 from cosim.kinds.base import CarKind
 from cosim.kinds.car import fault_columns
-from cosim.kinds.comfort import COLUMNS, comfort_columns
 from cosim.kinds.curve_entry import MAX_SPEED_M_PER_S, CurveTest, IrregularitySpec, parse_irregularity
 from cosim.limits.checks import CaseMetrics
+from cosim.limits.ride_comfort import COLUMNS, comfort_columns
 from cosim.results.io import Progress, read_rows
 from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection

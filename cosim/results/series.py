@@ -16,10 +16,7 @@ import xarray as xr
 
 from cosim.master import OUTPUTS
 from cosim.scenario.schema import k_label
-from vehicle.params import BELLOWS, FLOOR_POINTS, WHEELS
-
-#: wheelsets, "1" ... "4" from the front (from the car's wheel names)
-WHEELSETS = tuple(dict.fromkeys(wheel[:-1] for wheel in WHEELS))
+from vehicle.params import BELLOWS, FLOOR_POINTS, WHEELS, WHEELSETS
 
 
 def case_name(k: float, valves: Optional[bool]) -> str:

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from cosim.kinds import en14363
+from cosim.limits import en14363
 from cosim.limits.assessment import (
     ZONES,
     q_limit_N,

@@ -250,7 +250,7 @@ def test_a_car_run_reports_the_comfort_of_each_floor_point():
     # the summary columns are the record's comfort: a Dataset of known floor accelerations
     import xarray as xr
 
-    from cosim.kinds.comfort import comfort_columns
+    from cosim.limits.ride_comfort import comfort_columns
     t = np.arange(0.0, 30.0, 0.005)
     data = {f"floor_a{a}_m_per_s2": (("time", "floor_point"), np.stack([_sines(t, p) * s for s in (1.0, 0.5, 2.0)], 1))
             for a, p in PARTS.items()}

@@ -26,8 +26,7 @@ from cosim.limits.assessment import (
     zone_of,
     zone_statistics,
 )
-from cosim.results.series import WHEELSETS
-from vehicle.params import WHEELS, VehicleParams
+from vehicle.params import WHEELS, WHEELSETS, VehicleParams
 from vehicle.track import Arc, Straight, TrackGeometry
 
 #: quantity -> (Dataset variable, per wheel or wheelset, unit, long name); contact-only where the
