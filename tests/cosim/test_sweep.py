@@ -535,7 +535,8 @@ def _csv_column(check, scenario) -> str:
     """The sweep.csv column a check's value must come from: the summary column of its metric (for
     an EN 14363 metric, the worst over the zones it covers; with a zone selector, the zone must be
     the only one that column covers)."""
-    from cosim.kinds import curve_entry, en14363
+    from cosim.kinds import curve_entry
+    from cosim.limits import en14363
     assert check.wheel is None and check.k is None and check.valves is None, f"{check.text}: extend the oracle"
     if check.metric not in en14363.METRICS:
         assert check.zone is None
