@@ -7,14 +7,15 @@ import each other (each only from those above it; ``tests/test_architecture.py``
   the strict YAML reader (:mod:`~cosim.scenario.yaml_input`), the checking of values into
   dataclasses (:mod:`~cosim.scenario.schema`), circuits (:mod:`~cosim.scenario.circuits`),
   presets, the ``checks:`` section (:mod:`~cosim.scenario.checks`);
-* ``cosim/limits/``: judging results: the checks evaluated, EN 14363 criteria, the models'
-  validity flags, the state limits that stop an impossible case;
+* ``cosim/limits/``: judging results: the checks evaluated, EN 14363 criteria and the
+  assessment of a run on track, comfort, the models' validity flags, the state limits that stop
+  an impossible case;
 * :mod:`cosim.master`: the co-simulation master (the macro-step coupling of car and circuit);
   ``cosim/results/``: the :class:`~cosim.results.outcome.Outcome` of a run, its labelled series,
   the writer, plots, output folders, what ``compare`` reads;
-* ``cosim/kinds/``: one module per scenario kind (the rig tests, ``twist``, ``curve_entry``):
-  its experiment, its checking, its run, figures and metrics; the registry
-  (:data:`cosim.kinds.KINDS`);
+* ``cosim/kinds/``: the scenario kinds, each a :class:`~cosim.kinds.base.Kind` subclass (its
+  experiment, its checking, its run, figures and metrics), and the registry of their instances
+  (:data:`cosim.kinds.KINDS`; docs/architecture.md);
 * :mod:`cosim.load` (:func:`load_scenario`), :mod:`cosim.runner` (:func:`run`,
   :func:`run_scenario`), :mod:`cosim.keyref` (the generated key reference);
 * ``cosim/verification/``: ``verify`` (every step halved: Richardson) and the monolithic

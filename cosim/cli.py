@@ -114,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scenario value, e.g. --set twist.hold_s=10 (repeatable)")
     v = sub.add_parser("verify", help="rerun with every step halved, estimate the discretisation error (Richardson)")
-    v.add_argument("scenario", type=Path, help="scenario YAML file (twist or curve_entry)")
+    v.add_argument("scenario", type=Path, help="a car scenario YAML file (a rig scenario is refused, naming the car kinds)")
     v.add_argument("--levels", type=int, default=None, help="number of halvings (default: the scenario's verify.levels, 2)")
     scenario_options(v, "results/<scenario name>_verify")
     w = sub.add_parser("sweep", help="run a scenario for every combination of a grid of values (docs/sweeps.md)")
@@ -144,7 +144,7 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--out", type=Path, default=None, help="output folder (default: beside the file, comfort_<its name>)")
     i = sub.add_parser("identify", help="fit scenario keys (k first) to measured rig data, with 95 %% intervals "
                                         "(docs/identify.md)")
-    i.add_argument("scenario", type=Path, help="a rig scenario: rig_sine or rig_ramp (time history), rig_stiffness (table)")
+    i.add_argument("scenario", type=Path, help="a rig scenario of an identifiable kind (a time history or a stiffness table; others are refused, naming them)")
     i.add_argument("--data", type=Path, default=None, help="CSV: t_s, z_m and any of F_bellow_N, p_bellow_Pa, p_tank_Pa, "
                                                            "T_bellow_K, T_tank_K; or a stiffness table")
     i.add_argument("--fit", default="k_W_per_K", metavar="KEY[,KEY ...]",

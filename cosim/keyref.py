@@ -77,10 +77,10 @@ the default shown. Units are in the names (SI: Pa absolute, K, kg, m, s, N, W/K)
 of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is isothermal),
 `checks` (car scenarios: e.g. `dqq_max <= 0.6`, `dqq_max[3R] <= 0.6`, `dqq_max[k=0] <= 0.6`,
 `yq_2m_p9985[zone=R<250] <= 1.2`; docs/assessment.md).
-The rig kinds take `circuit: {bellow, tank, pipe, p0_Pa}` and `test`; the car kinds (`twist`,
-`curve_entry`) take `vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the
+The rig kinds ({rig}) take `circuit: {{bellow, tank, pipe, p0_Pa}}` and `test`; the car kinds
+({car}) take `vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the
 sections below, or an explicit `components:` mapping of named components with a `type`),
-`solver`, `verify`, `state_limits` and their experiment (`twist`, `curve`).
+`solver`, `verify`, `state_limits` and their experiment ({sections}).
 """
 
 
@@ -112,8 +112,17 @@ def section(key: str, cls, note: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def header() -> str:
+    """:data:`HEADER` with the registry's kinds (:data:`cosim.kinds.KINDS`)."""
+    from cosim.kinds import KINDS
+    car = [k for k in KINDS.values() if k.car]
+    return HEADER.format(rig=", ".join(f"`{k.name}`" for k in KINDS.values() if not k.car),
+                         car=", ".join(f"`{k.name}`" for k in car),
+                         sections=", ".join(f"`{k.section}`" for k in car))
+
+
 def reference() -> str:
-    return HEADER + "".join("\n" + section(*s) for s in (*kind_sections(), *CAR_SECTIONS, *CIRCUIT_SECTIONS))
+    return header() + "".join("\n" + section(*s) for s in (*kind_sections(), *CAR_SECTIONS, *CIRCUIT_SECTIONS))
 
 
 if __name__ == "__main__":

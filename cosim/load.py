@@ -3,9 +3,9 @@
 scenario the kinds run.
 
 A scenario is a YAML mapping with a ``kind`` (:mod:`cosim.kinds`) and the section of its
-experiment: a rig kind adds a rig ``circuit`` and its ``test``; a car kind (``twist``,
-``curve_entry``) adds ``vehicle``, ``track``, a car ``circuit``, ``solver``, ``verify``,
-``state_limits`` and ``checks``.
+experiment: a rig kind (:class:`~cosim.kinds.base.RigKind`) adds a rig ``circuit`` and its
+``test``; a car kind (:class:`~cosim.kinds.base.CarKind`) adds ``vehicle``, ``track``, a car
+``circuit``, ``solver``, ``verify``, ``state_limits`` and ``checks``.
 
 Every error names the file, the key path and what was expected (:class:`ScenarioError`).
 """
