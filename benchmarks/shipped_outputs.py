@@ -2,6 +2,7 @@
 
     python benchmarks/shipped_outputs.py run results/outputs_before          # from the repository's top
     python benchmarks/shipped_outputs.py run results/outputs_after --only curve_,twist_
+    python benchmarks/shipped_outputs.py run results/gates --gates          # every gate: check --report
     python benchmarks/shipped_outputs.py compare results/outputs_before results/outputs_after
 
 ``run`` writes each scenario's run (``pneumorail run``, as a user would) into a folder of its own
@@ -22,18 +23,26 @@ import time
 from pathlib import Path
 
 SCENARIOS = Path("scenarios")
+#: the words of check's closing line (cosim.limits.checks.VERDICT_LINE)
+VERDICT_WORDS = ("all limits hold", "LIMIT VIOLATED", "ERROR")
 
 
-def run_all(out: Path, only: tuple) -> int:
+def run_all(out: Path, only: tuple, gates: bool = False) -> int:
+    """Every scenario (``gates``: those with checks through ``check --report``, printing the
+    verdict's last line)."""
     failed = 0
     for path in sorted(SCENARIOS.glob("*.yaml")):
         if only and not any(path.stem.startswith(o) for o in only):
             continue
         t0 = time.perf_counter()
-        done = subprocess.run([sys.executable, "-m", "cosim.cli", "run", str(path), "--out", str(out.resolve() / path.stem),
+        gated = gates and "\nchecks:" in path.read_text()
+        command = ["check", str(path), "--report"] if gated else ["run", str(path)]
+        done = subprocess.run([sys.executable, "-m", "cosim.cli", *command, "--out", str(out.resolve() / path.stem),
                                "--overwrite", "--quiet"], capture_output=True, text=True)
         failed += done.returncode not in (0, 1)            # 1: a check or a diverged case is a result too
-        print(f"{path.stem:28s} exit {done.returncode}  {time.perf_counter() - t0:7.1f} s", flush=True)
+        verdict = [line for line in done.stdout.splitlines() if any(w in line for w in VERDICT_WORDS)] if gated else []
+        print(f"{path.stem:28s} exit {done.returncode}  {time.perf_counter() - t0:7.1f} s  {' '.join(verdict)}",
+              flush=True)
         if done.returncode not in (0, 1):
             print(done.stderr[-2000:], file=sys.stderr)
     return 1 if failed else 0
@@ -81,12 +90,13 @@ def main() -> int:
     r = sub.add_parser("run")
     r.add_argument("out", type=Path)
     r.add_argument("--only", default="", help="comma-separated scenario name prefixes")
+    r.add_argument("--gates", action="store_true", help="scenarios with checks: check --report instead of run")
     c = sub.add_parser("compare")
     c.add_argument("before", type=Path)
     c.add_argument("after", type=Path)
     args = p.parse_args()
     if args.command == "run":
-        return run_all(args.out, tuple(o for o in args.only.split(",") if o))
+        return run_all(args.out, tuple(o for o in args.only.split(",") if o), args.gates)
     return compare(args.before, args.after)
 
 
