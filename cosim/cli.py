@@ -62,8 +62,9 @@ EPILOG = """\
 exit codes:
   0    success (check: every limit holds; verify: every error estimate within its tolerance;
        validate: every file is valid; sweep: every case finished)
-  1    a limit is violated, a result is outside the model's validity (check), an error estimate
-       exceeds its tolerance, a run diverged, a sweep case failed, a result could not be written
+  1    a limit is violated or a check has no value (check: ERROR, saying why), a result is
+       outside the model's validity (check), an error estimate exceeds its tolerance, a run
+       diverged, a sweep case failed, a result could not be written
   2    bad input: the message names the file, the key path and what was expected
   130  interrupted by Ctrl-C (SIGINT), 143 by SIGTERM: what was computed is kept
 
