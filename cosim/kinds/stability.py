@@ -304,7 +304,8 @@ def _body_columns(modes) -> Dict[str, float]:
 
 
 def run(scenario: Scenario, progress: Progress) -> Outcome:
-    from cosim.stability import critical_speed, scan_speeds
+    """The linear analysis (:func:`_linear_rows`), the time-domain ones the scenario asks for
+    (:func:`_time_domain`), the verdict of each row (:func:`verdict_columns`)."""
     t0 = time.perf_counter()
     test = scenario.stability
     contact = contact_params(test, scenario.vehicle)
@@ -312,8 +313,30 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     progress(f"linear stability at {len(speeds)} speeds ({speeds[0]:g}-{speeds[-1]:g} m/s), "
              f"{len(scenario.k_W_per_K)} k values x valves {test.valve_settings}")
     probe = make_car(scenario, speeds[0], contact)
-    F0 = probe.static_bellow_forces_N()
-    table = probe.contact_table
+    rows, mode_rows = _linear_rows(scenario, contact, probe.static_bellow_forces_N(), speeds, progress)
+    tables = {"modes": mode_rows}
+    diagnoses, warnings = _time_domain(scenario, rows, tables, progress)
+    for row in rows:
+        row.update(verdict_columns(row, tables.get("nonlinear", ())))
+    circuit_rows = [r for r in rows if r["airspring"] == "circuit"]
+    cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, math.nan) for m in KIND.check_metrics})
+             for r in circuit_rows]
+    metrics = {m: float(np.min([r[m] for r in circuit_rows]))            # NaN when one case has none
+               for m in KIND.check_metrics if circuit_rows and m in circuit_rows[0]}
+    info = {"contact_table": contact.table_csv or "S1002 / UIC60 1:40 (shipped)",
+            "conicity_at_centre": _centre_conicity(probe),
+            "equivalent_conicity_3mm": float(probe.contact_table.equivalent_conicity(0.003)),
+            "speeds_m_per_s": speeds}
+    return Outcome(scenario, rows, _shown(test), {}, metrics, cases, diagnoses, warnings, info,
+                   time.perf_counter() - t0, tables=tables)
+
+
+def _linear_rows(scenario: Scenario, contact: ContactParams, F0, speeds: List[float], progress: Progress):
+    """(a summary row per valve setting x k x airspring model, every mode below
+    ``max_frequency_Hz`` at every speed): the linear critical speed, the mode that loses its
+    damping, the carbody modes at the reference speed."""
+    from cosim.stability import critical_speed, scan_speeds
+    test = scenario.stability
     rows, mode_rows = [], []
     linearised: Dict[tuple, _Cars] = {}                # the car's linearisations by its bellows' stiffness:
                                                        # frozen air and static (isothermal for k > 0) repeat over k
@@ -334,41 +357,40 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
                 scan = scan_speeds(cars, coupled_air, speeds)
                 v_crit, bracket, note = critical_speed(cars, coupled_air, scan, test.resolution_m_per_s)
                 progress(f"valves {'on' if valves else 'off'}, k = {k:g} W/K, airsprings {model}: {note}")
-                row = {"valves": bool(valves), "k_W_per_K": float(k), "airspring": model}
-                row.update(_critical_columns(cars, coupled_air, scan, v_crit, bracket, note))
-                ref = scan.modes[speeds.index(test.reference_speed)]
-                row.update(_body_columns(ref))
+                key = {"valves": bool(valves), "k_W_per_K": float(k), "airspring": model}
+                row = {**key, **_critical_columns(cars, coupled_air, scan, v_crit, bracket, note)}
+                row.update(_body_columns(scan.modes[speeds.index(test.reference_speed)]))
                 rows.append(row)
-                for v, ms in zip(scan.speeds_m_per_s, scan.modes):
-                    for m in ms:
-                        if abs(m.eigenvalue) <= 2.0 * math.pi * test.max_frequency_Hz:
-                            mode_rows.append({"valves": bool(valves), "k_W_per_K": float(k), "airspring": model,
-                                              "speed_m_per_s": float(v), "mode": m.label,
-                                              "frequency_Hz": m.frequency_Hz, "damping_ratio": m.damping_ratio,
-                                              "real_per_s": m.eigenvalue.real, "imag_per_s": m.eigenvalue.imag})
-    tables = {"modes": mode_rows}
+                mode_rows += [{**key, "speed_m_per_s": float(v), "mode": m.label, "frequency_Hz": m.frequency_Hz,
+                               "damping_ratio": m.damping_ratio, "real_per_s": m.eigenvalue.real,
+                               "imag_per_s": m.eigenvalue.imag}
+                              for v, ms in zip(scan.speeds_m_per_s, scan.modes) for m in ms
+                              if abs(m.eigenvalue) <= 2.0 * math.pi * test.max_frequency_Hz]
+    return rows, mode_rows
+
+
+def _time_domain(scenario: Scenario, rows: List[Dict[str, object]], tables: Dict[str, list], progress: Progress):
+    """The brute force and the ramp-down the scenario asks for: their tables (into ``tables``),
+    their results in the circuit rows; (diagnoses, warnings): without either, the warning that the
+    critical speed is the linear one only."""
+    test = scenario.stability
     diagnoses: List[str] = []
+    warnings: List[str] = []
     if test.nonlinear_speeds_m_per_s:
         tables["nonlinear"], diagnoses = _brute_force(scenario, progress)
         _add_onsets(rows, tables["nonlinear"])
-    warnings: List[str] = []
     if test.ramp_from_m_per_s is not None:
         tables["ramp"], tables["ramp_envelope"], found = _ramp_down(scenario, progress)
         diagnoses += found
         _add_ramp_ends(rows, tables["ramp"])
-    for row in rows:
-        row.update(verdict_columns(row, tables.get("nonlinear", ())))
     if not test.nonlinear_speeds_m_per_s and test.ramp_from_m_per_s is None:
         warn(warnings, LINEAR_ONLY_WARNING)
-    cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, math.nan) for m in KIND.check_metrics})
-             for r in rows if r["airspring"] == "circuit"]
-    circuit_rows = [r for r in rows if r["airspring"] == "circuit"]
-    metrics = {m: float(np.min([r[m] for r in circuit_rows]))            # NaN when one case has none
-               for m in KIND.check_metrics if circuit_rows and m in circuit_rows[0]}
-    info = {"contact_table": contact.table_csv or "S1002 / UIC60 1:40 (shipped)",
-            "conicity_at_centre": _centre_conicity(probe),
-            "equivalent_conicity_3mm": float(table.equivalent_conicity(0.003)),
-            "speeds_m_per_s": speeds}
+    return diagnoses, warnings
+
+
+def _shown(test: StabilityTest) -> Tuple[str, ...]:
+    """The summary columns printed: the verdict and its parts, the carbody's sway and yaw, and
+    the time-domain results the scenario asked for."""
     shown = ("valves", "k_W_per_K", "airspring", "critical_speed_m_per_s", "critical_speed_by",
              "linear_critical_speed_m_per_s", "critical_mode", "critical_frequency_Hz", "min_damping_ratio",
              "f_lower_sway_Hz", "zeta_lower_sway", "f_yaw_Hz", "zeta_yaw")
@@ -378,8 +400,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         shown += ("nonlinear_onset_m_per_s",)
     if test.ramp_from_m_per_s is not None:
         shown += ("limit_cycle_ends_m_per_s",)
-    return Outcome(scenario, rows, shown, {}, metrics, cases, diagnoses, warnings, info, time.perf_counter() - t0,
-                   tables=tables)
+    return shown
 
 
 def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str, object]], List[str]]:
