@@ -367,6 +367,16 @@ def test_unit_limit_can_be_raised(tmp_path):
     assert TrackIrregularity.from_file(path, max_abs_m=0.2)(100.0).lateral_m == pytest.approx(0.14)
 
 
+def _track_input(irregularity, s0: np.ndarray, speed_m_per_s: float):
+    """The car's track input alone: wheelsets at s0 + v t along an unbounded straight (a car
+    centred at s = 0 whose wheelsets stand at s0)."""
+    from vehicle.car.options import RunSettings
+    from vehicle.car.path import CarPath
+    from vehicle.car.track_input import TrackInput
+    path = CarPath.plan(RunSettings(speed_m_per_s=speed_m_per_s), s0, contact_guidance=False)
+    return TrackInput(path, None, irregularity, 1.5, contact_guidance=False)
+
+
 @pytest.mark.parametrize("irregularity, ok", [
     (lambda s: (s * 0.0, s * 1e-3, s * 0.0, s * 0.0), True),
     (lambda s: (0.0, s * 1e-3, 0.0, np.zeros(s.shape[-1])), True),          # channels that broadcast to s
@@ -376,18 +386,17 @@ def test_unit_limit_can_be_raised(tmp_path):
     (lambda s: (s * 0.0, s * 0.0, s * 0.0, np.zeros(7)), False),            # a shape that is not s's
 ])
 def test_the_car_reads_an_irregularity_function_as_its_contract_says(irregularity, ok):
-    """MetroCar's per-step reading of ``irregularity(s)`` (vehicle.car.hooks): four arrays shaped
-    like s (or broadcasting to it), finite; anything else a ValueError saying what is expected."""
-    from vehicle.car.hooks import StepHooks
+    """MetroCar's per-step reading of ``irregularity(s)`` (vehicle.car.track_input): four arrays
+    shaped like s (or broadcasting to it), finite; anything else a ValueError saying what is
+    expected."""
     s0 = np.array([1.0, 3.0, 10.0, 12.0])
-    car = StepHooks()  # the hooks alone, on these two attributes
-    car._irr, car._wheelset_s_m = irregularity, lambda t: s0 + 20.0 * np.asarray(t)
+    track = _track_input(irregularity, s0, 20.0)
     times = np.array([[0.1], [0.2], [0.3]])
     if not ok:
         with pytest.raises(ValueError, match="4 finite arrays"):
-            car._irregularity_at(times)
+            track.irregularity_at(times)
         return
-    values = car._irregularity_at(times)
+    values = track.irregularity_at(times)
     assert len(values) == 4 and all(v.shape == (3, 4) for v in values)
     expected = irregularity(s0 + 20.0 * times)
     for got, want in zip(values, expected if not hasattr(expected, "__next__") else [0.0] * 4):
@@ -395,19 +404,19 @@ def test_the_car_reads_an_irregularity_function_as_its_contract_says(irregularit
 
 
 def test_the_contact_cars_rails_are_the_irregularitys_rail_offsets():
-    """The contact car's conversion of the irregularity into rails (vehicle.car.hooks._rails_from:
+    """The contact car's conversion of the irregularity into rails (vehicle.car.track_input.rails_from:
     one compiled pass over the irregularity at t - d, t, t + d plus rail_height_m; how the car
     calls it is exercised by the car's own tests) against
     TrackIrregularity.rail_offsets, written separately: each rail's offsets at t, and their
     rates as the central differences of rail_offsets. Tolerance: 1e-15 m on the offsets (the
     same sums, in another order at most), 1e-15 m / (2 d) on the rates (the differences of
     those values)."""
-    from vehicle.car.hooks import _rails_from
+    from vehicle.car.track_input import rails_from
     irr = TrackIrregularity.from_psd("erri_b176_low", 200.0, 0.25, seed=7)
     s = np.array([[30.0, 31.9, 40.0, 41.9]]) + np.array([[-0.02], [0.0], [0.02]])
     z_rail = np.random.default_rng(3).normal(0.0, 1e-3, (3, 8))
     d = 1e-3
-    got = _rails_from(irr.stacked(s), z_rail, d)
+    got = rails_from(irr.stacked(s), z_rail, d)
     off = [irr.rail_offsets(row) for row in s]  # per time: y_L, z_L, y_R, z_R, each (4,)
     for side, (y, z) in enumerate((("y_left_m", "z_left_m"), ("y_right_m", "z_right_m"))):
         e = np.array([getattr(o, y) for o in off])
@@ -424,18 +433,16 @@ def test_the_car_reads_a_track_irregularity_as_it_reads_any_function():
     channels as calling it, at one time (shape (4,) each) and at three (shape (3, 4) each), and
     stacked (channels last) for it and for a plain function alike."""
 
-    from vehicle.car.hooks import StepHooks
     irr = TrackIrregularity.from_psd("erri_b176_low", 200.0, 0.25, seed=5)
     s0 = np.array([30.0, 31.9, 40.0, 41.9])
     s_of = lambda t: s0 + 20.0 * np.asarray(t)
     for fn in (irr, lambda s: tuple(irr(s))):
-        car = StepHooks()  # the hooks alone, on these two attributes
-        car._irr, car._wheelset_s_m = fn, s_of
+        track = _track_input(fn, s0, 20.0)
         for t in (0.1, np.array([[0.1], [0.2], [0.3]])):
             want = irr(s_of(t))
-            got = car._irregularity_at(t)
+            got = track.irregularity_at(t)
             assert len(got) == 4
             for g, w in zip(got, want):
                 np.testing.assert_array_equal(g, w)
-            stacked = car._irregularity_stacked(t)
+            stacked = track.irregularity_stacked(t)
             np.testing.assert_array_equal(stacked, np.stack(want, axis=-1))

@@ -77,8 +77,8 @@ def test_steady_state_balances_the_car_and_lets_the_wheels_roll_free():
     lin = linearise_car(car, car.static_bellow_forces_N(), np.full(4, 5.9e5))
     assert lin.residual_N < 1e-6
     assert lin.reaction_N < 5.0
-    spin = np.array(car.mbs.systemData.GetODE2Coordinates_t())[[int(car.mbs.GetNodeODE2Index(n)) for n in car._spin_nodes]]
-    geo = car._wr.table.geometry(0.0)
+    spin = np.array(car.mbs.systemData.GetODE2Coordinates_t())[[int(car.mbs.GetNodeODE2Index(n)) for n in car.model.spin_nodes]]
+    geo = car.contact.track_contact.table.geometry(0.0)
     assert spin == pytest.approx(np.full(4, 40.0 / (geo["r_L"] + geo["r_R"])), rel=1e-7)
 
 
@@ -94,7 +94,7 @@ def test_central_differences_agree_with_exudyns_own_linearisation():
     car = _car(VehicleParams())
     F0 = car.static_bellow_forces_N()
     mine = linearise_car(car, F0, np.full(4, 5.9e5))
-    mbs, solver = car.mbs, car._solver
+    mbs, solver = car.mbs, car.solver.main
     n2 = solver.GetODE2size()
     M = mass_matrix(mbs, solver)
     solver.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=-1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0)
@@ -102,7 +102,7 @@ def test_central_differences_agree_with_exudyns_own_linearisation():
     solver.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=-1.0, scalarFactor_ODE1=0.0)
     D = np.array(solver.GetSystemJacobian()[:n2, :n2])
     N = null_space(constraint_jacobian(mbs, solver))
-    spins = [int(mbs.GetNodeODE2Index(n)) for n in car._spin_nodes]
+    spins = [int(mbs.GetNodeODE2Index(n)) for n in car.model.spin_nodes]
     theirs = first_order_eigenvalues(N.T @ M @ N, N.T @ K @ N, N.T @ D @ N)
     ours = first_order_eigenvalues(mine.system.M, mine.system.K, mine.system.D)
 
@@ -197,13 +197,13 @@ def test_a_slowing_car_keeps_rolling_on_its_wheels():
     slowing = MetroCar(VehicleParams(), step_s=5e-3, speed_m_per_s=30.0, guidance="contact", deceleration=(1.0, 2.0))
     slowing.set_bellow_forces(slowing.static_bellow_forces_N(), np.full(4, 5.9e5))
     sd = slowing.mbs.systemData
-    spin_index = [int(slowing.mbs.GetNodeODE2Index(n)) for n in slowing._spin_nodes]
+    spin_index = [int(slowing.mbs.GetNodeODE2Index(n)) for n in slowing.model.spin_nodes]
     for t in (0.5, 1.0, 2.0, 3.0, 4.0):
         slowing.advance(t)
         v = np.array(sd.GetODE2Coordinates_t())
         assert v[0] == pytest.approx(slowing.speed_profile.speed(t), abs=1e-6)
         wheelsets = v[[18, 24, 30, 36]]
         assert np.all(np.abs(wheelsets - slowing.speed_profile.speed(t)) < 0.4)
-        assert np.all(np.abs(v[spin_index] * slowing._wr.r0 / wheelsets - 1.0) < 1e-3)
-    assert slowing._wr.V == pytest.approx(slowing.speed_profile.speed(4.0))
+        assert np.all(np.abs(v[spin_index] * slowing.contact.track_contact.r0 / wheelsets - 1.0) < 1e-3)
+    assert slowing.contact.track_contact.V == pytest.approx(slowing.speed_profile.speed(4.0))
     assert car.speed_profile.constant

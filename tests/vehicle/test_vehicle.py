@@ -15,7 +15,16 @@ import exudyn
 import numpy as np
 import pytest
 
-from vehicle.car import BELLOWS, EXUDYN_TESTED_MINOR, WHEELS, MetroCar
+from vehicle.car import (
+    BELLOWS,
+    EXUDYN_TESTED_MINOR,
+    WHEELS,
+    CarOptions,
+    MetroCar,
+    ModelOptions,
+    RunSettings,
+    SolverSettings,
+)
 from vehicle.params import VehicleParams
 
 P = VehicleParams()
@@ -127,13 +136,13 @@ def test_bellow_force_pair_lifts_the_carbody():
     car.set_bellow_forces(car.static_bellow_forces_N() + dF)
     velocity = exudyn.OutputVariableType.Velocity
     car.advance(0.1)
-    v1 = car.mbs.GetObjectOutputBody(car._carbody, velocity)[2]
+    v1 = car.mbs.GetObjectOutputBody(car.model.carbody, velocity)[2]
     car.advance(0.2)
-    v2 = car.mbs.GetObjectOutputBody(car._carbody, velocity)[2]
+    v2 = car.mbs.GetObjectOutputBody(car.model.carbody, velocity)[2]
     assert (v2 - v1) / 0.1 == pytest.approx(4 * dF / P.carbody_mass_kg, rel=1e-6)
     # the force pair pushes the bogies down: the bellows extend (z < 0) by more than the
     # carbody alone rises
-    z_cb = car.mbs.GetObjectOutputBody(car._carbody, exudyn.OutputVariableType.Displacement)[2]
+    z_cb = car.mbs.GetObjectOutputBody(car.model.carbody, exudyn.OutputVariableType.Displacement)[2]
     z, _ = car.bellow_crushing()
     assert z_cb > 0 and np.all(z < -z_cb)
 
@@ -149,7 +158,7 @@ def test_force_law_is_linearised_about_the_crushing_and_time_at_call():
     car.advance(0.2)
     z, _ = car.bellow_crushing()
     force_on_bogie = np.array([car.mbs.GetObjectOutput(co, exudyn.OutputVariableType.ForceLocal)[2]
-                               for co in car._bellows])
+                               for co in car.model.airsprings.connectors])
     # connector force f acts as +f on the lower plate (bogie): f_z = -F(t, z) pushes it down,
     # along the bellow axis (z of the connector's mid-frame, in which z is measured too)
     assert np.allclose(-force_on_bogie, F + Fdot * (0.2 - 0.1) + k * (z - z_call), rtol=1e-12, atol=1e-6)
@@ -191,6 +200,26 @@ def test_jacobian_reuse_does_not_change_the_solution():
     assert np.allclose(cars[0].wheel_loads_N(), cars[1].wheel_loads_N(), rtol=0, atol=1e-2)
     assert np.allclose(cars[0].bellow_crushing()[0], cars[1].bellow_crushing()[0],
                        rtol=0, atol=1e-8)
+
+
+def test_options_grouped_build_the_car_the_keywords_build():
+    """MetroCar(params, options=CarOptions(...)) is MetroCar(params, **keywords), bit for bit
+    (rail heights, step and a run setting and a solver setting through each way); a keyword no
+    group has, or options given both ways, is a TypeError, as for any function."""
+    rail = raise_front_right(0.003, 0.1)
+    by_keywords = MetroCar(P, rail, 4e-3, newton_abs_tol=1e-5, carbody_load=True)
+    grouped = MetroCar(P, options=CarOptions(model=ModelOptions(carbody_load=True),
+                                             run=RunSettings(rail_height_m=rail),
+                                             solver=SolverSettings(step_s=4e-3, newton_abs_tol=1e-5)))
+    assert by_keywords.options == grouped.options
+    for car in (by_keywords, grouped):
+        car.set_carbody_load(torque_N_m=(2e4, 0.0, 0.0))
+        emulate_pneumatics(car, 0.2)
+    assert by_keywords.wheel_loads_N().tobytes() == grouped.wheel_loads_N().tobytes()
+    with pytest.raises(TypeError, match="'speed_m_per_sec'"):
+        MetroCar(P, speed_m_per_sec=10.0)
+    with pytest.raises(TypeError, match="not both"):
+        MetroCar(P, step_s=1e-3, options=CarOptions())
 
 
 def test_rail_height_function_must_return_eight_values():

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from hand_models import roll_hand_calculation
 
-from vehicle.car import _SYMBOLIC_OPS, MetroCar
+from vehicle.car import SYMBOLIC_OPS, MetroCar
 from vehicle.params import VehicleParams, metro_car_arb_dampers
 from vehicle.suspension import (
     FLOAT_OPS,
@@ -62,12 +62,12 @@ def run_with_load(car, t_end_s, load, record=None):
 
 
 def record_state(car):
-    z = car.mbs.GetObjectOutputBody(car._carbody, OUT.Position)[2] - P.carbody_cog_height_m
+    z = car.mbs.GetObjectOutputBody(car.model.carbody, OUT.Position)[2] - P.carbody_cog_height_m
     return car.t_s, z, car.carbody_roll_rad()
 
 
 def bogie_roll_rad(car, ib):
-    A = np.asarray(car.mbs.GetObjectOutputBody(car._bogies[ib], OUT.RotationMatrix)).reshape(3, 3)
+    A = np.asarray(car.mbs.GetObjectOutputBody(car.model.bogies[ib], OUT.RotationMatrix)).reshape(3, 3)
     return math.atan2(A[2, 1], A[2, 2])
 
 
@@ -180,7 +180,7 @@ def test_symbolic_laws_equal_the_float_laws():
     # the same law code builds the connectors' symbolic (C++) user functions: every branch
     # must give the float result
     x = esym.Real("x", 0.0)
-    state = {_SYMBOLIC_OPS: (esym.Real("y", 1e-4), esym.Real("yd", 0.02), esym.Real("h", 5e-3)),
+    state = {SYMBOLIC_OPS: (esym.Real("y", 1e-4), esym.Real("yd", 0.02), esym.Real("h", 5e-3)),
              FLOAT_OPS: (1e-4, 0.02, 5e-3)}
     laws = [
         (lambda o, v: bilinear_damper_force_N(v, 10e3, 3e3, 0.1, o), (-0.4, -0.05, 0.0, 0.07, 0.3)),
@@ -193,7 +193,7 @@ def test_symbolic_laws_equal_the_float_laws():
          (0.0, 0.04, 0.05)),
     ]
     for law, values in laws:
-        expression = law(_SYMBOLIC_OPS, x)
+        expression = law(SYMBOLIC_OPS, x)
         for v in values:
             x.SetValue(v)
             assert expression.Evaluate() == pytest.approx(law(FLOAT_OPS, v), rel=1e-12, abs=1e-9)
@@ -203,7 +203,8 @@ def test_symbolic_laws_equal_the_float_laws():
 def test_components_are_off_by_default():
     # the paper's car: nothing built, the same model as before these components existed
     car = MetroCar(P)
-    assert car._arbs == [] and car._traction_rods == [] and car._dampers == []
+    optional = car.model.optional
+    assert optional.anti_roll_bars == [] and optional.traction_rods == [] and optional.dampers == []
     assert not car.airspring_in_series
     assert car.damper_forces_N() == {} and car.anti_roll_bar_moments_N_m().size == 0
     assert np.array_equal(car.airspring_crushing_m(), car.bellow_crushing()[0])
@@ -215,7 +216,7 @@ def test_typical_metro_car_set():
     assert p.arb_roll_stiffness_N_m_per_rad == 1.0e6
     assert p.yaw_damping_N_s_per_m == 0.0  # metro cars: no yaw dampers
     car = MetroCar(p)
-    assert len(car._arbs) == 2 and len(car._traction_rods) == 2
+    assert len(car.model.optional.anti_roll_bars) == 2 and len(car.model.optional.traction_rods) == 2
     assert sorted(car.damper_forces_N()) == sorted(
         ["vertical_FL", "vertical_FR", "vertical_RL", "vertical_RR", "lateral_F", "lateral_R"])
     assert car.airspring_in_series
@@ -380,10 +381,10 @@ def resonant_sway(p, cycles_driven=10, cycles_free=5, force_N=250.0):
     and the release time."""
     car = MetroCar(p, carbody_load=True)
     held_bellows(car)
-    bodies = [(car._carbody, p.carbody_mass_kg, (p.carbody_inertia_xx_kg_m2, p.carbody_inertia_yy_kg_m2,
+    bodies = [(car.model.carbody, p.carbody_mass_kg, (p.carbody_inertia_xx_kg_m2, p.carbody_inertia_yy_kg_m2,
                                                  p.carbody_inertia_zz_kg_m2))]
     bodies += [(b, p.bogie_mass_kg, (p.bogie_inertia_xx_kg_m2, p.bogie_inertia_yy_kg_m2, p.bogie_inertia_zz_kg_m2))
-               for b in car._bogies]
+               for b in car.model.bogies]
     release = cycles_driven * SWAY_PERIOD_S
     rec = []
     for _ in range(int(round((release + cycles_free * SWAY_PERIOD_S) / MACRO_S))):
@@ -397,7 +398,7 @@ def resonant_sway(p, cycles_driven=10, cycles_free=5, force_N=250.0):
             w = np.asarray(car.mbs.GetObjectOutputBody(body, OUT.AngularVelocity))
             T += 0.5 * m * (v @ v) + 0.5 * sum(i * x * x for i, x in zip(inertia, w))
         forces = car.damper_forces_N()
-        rec.append((car.t_s, car.mbs.GetObjectOutputBody(car._carbody, OUT.Position)[1], T,
+        rec.append((car.t_s, car.mbs.GetObjectOutputBody(car.model.carbody, OUT.Position)[1], T,
                     forces.get("lateral_F", 0.0), forces.get("lateral_R", 0.0)))
     return np.array(rec).T, release
 
@@ -481,7 +482,7 @@ def test_traction_rods_carry_the_longitudinal_force():
     share = p.traction_rod_stiffness_N_per_m / (p.traction_rod_stiffness_N_per_m
                                                 + 2 * p.bellow_shear_stiffness_N_per_m)
     assert np.allclose(rods, -F / 2 * share, rtol=0.02)  # on the carbody: against the load
-    shear = [car.mbs.GetObjectOutput(co, OUT.ForceLocal)[0] for co in car._bellows]
+    shear = [car.mbs.GetObjectOutput(co, OUT.ForceLocal)[0] for co in car.model.airsprings.connectors]
     assert -rods.sum() + sum(shear) == pytest.approx(F, rel=0.01)  # the whole load is carried
 
 
@@ -510,7 +511,7 @@ def test_emergency_spring_acts_in_series_with_the_inflated_bellow():
                        rtol=1e-3)
     # the bellow force law is kept: F = F0 + k_b z_bellow
     force_on_bogie = np.array([car.mbs.GetObjectOutput(co, OUT.ForceLocal)[2]
-                               for co in car._bellows])
+                               for co in car.model.airsprings.connectors])
     assert np.allclose(-force_on_bogie, car.static_bellow_forces_N() + K_B * z_bellow, rtol=1e-9)
 
 

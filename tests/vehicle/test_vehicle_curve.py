@@ -200,9 +200,9 @@ def test_wheelsets_follow_the_track(left_adiabatic):
     x, y = car.track.position_m(s)
     heading = car.track.heading_rad(s)
     assert heading.min() > 1.0  # well into the arc (tests the large-yaw case)
-    for iw, w in enumerate(car._wheelsets):
+    for iw, w in enumerate(car.model.wheelsets):
         A = np.asarray(car.mbs.GetObjectOutputBody(w, out.RotationMatrix)).reshape(3, 3)
-        px, py, _ = np.asarray(car.mbs.GetObjectOutputBody(w, out.Position)) - A[:, 2] * car._z_wheelset_m
+        px, py, _ = np.asarray(car.mbs.GetObjectOutputBody(w, out.Position)) - A[:, 2] * car.static.wheelset_z_m
         assert math.hypot(px - x[iw], py - y[iw]) < 1e-9
         assert math.atan2(A[1, 0], A[0, 0]) == pytest.approx(heading[iw], abs=1e-9)
         assert abs(A[2, 0]) < 1e-9  # no pitch: the tangent axis stays horizontal
@@ -238,7 +238,7 @@ def test_steady_roll_in_the_arc_matches_the_hand_calculation(k_b, left_adiabatic
     # left-hand curve: outward is to the right, so the carbody's left side rises (roll > 0)
     assert roll == pytest.approx(hand["phi_c"], rel=0.03)
     out = __import__("exudyn").OutputVariableType
-    A = np.asarray(car.mbs.GetObjectOutputBody(car._bogies[0], out.RotationMatrix)).reshape(3, 3)
+    A = np.asarray(car.mbs.GetObjectOutputBody(car.model.bogies[0], out.RotationMatrix)).reshape(3, 3)
     assert math.atan2(A[2, 1], A[2, 2]) == pytest.approx(hand["phi_b"], rel=0.1)  # end value
     # outer (right) bellows crushed, inner extended, by b (phi_c - phi_b) each
     z = window_mean(rec, "z")

@@ -2,15 +2,29 @@
 heights (twist test) or running at constant speed along a track (curve entry, paper section 4.2):
 :class:`MetroCar`.
 
-The package, by what its files hold:
+The package, by what its files hold (each part a small object that receives what it needs
+explicitly; :class:`MetroCar` composes them and keeps the public interface):
 
-* :mod:`.model`: :class:`MetroCar`: construction, the static reference state, the co-simulation
+* :mod:`.model`: :class:`MetroCar`, the façade: builds the parts in order, the co-simulation
   interface (:meth:`~MetroCar.bellow_crushing`, :meth:`~MetroCar.set_bellow_forces`,
-  :meth:`~MetroCar.advance`);
-* :mod:`.build`: the bodies and every connector, the guidance, the contacts, the flexible track;
-* :mod:`.hooks`: what runs at every internal step (track frames, rail heights, damper states);
-* :mod:`.jacobian`: the solver and the reuse of its Newton Jacobian;
-* :mod:`.outputs`: the quantities the car reports (wheel loads, wheel-rail forces, roll, ...).
+  :meth:`~MetroCar.advance`), the outputs;
+* :mod:`.options`: what a car is asked for, three frozen groups (:class:`ModelOptions`,
+  :class:`RunSettings`, :class:`SolverSettings`) in :class:`CarOptions`;
+* :mod:`.statics`: the reference configuration (static loads and positions);
+* :mod:`.path`: where the car is along its track over time (arc lengths, speed profile);
+* :mod:`.contact`: contact guidance's table and law and where it holds the wheelsets at rest;
+* :mod:`.build`: the bodies, the guidance, the primary suspension, the contacts, the flexible
+  track: the exudyn model as built (:class:`~.build.CarModel`, its indices and variables);
+* :mod:`.secondary`: the airsprings, bumpstops and optional components as built;
+* :mod:`.track_input`: the track under the car at a time (centre line, rail heights,
+  irregularities, the contact law's rails);
+* :mod:`.hooks`: what is set before every internal step (guidance frames, rail heights, the
+  contact's track frames);
+* :mod:`.bellows`: the airspring force laws the co-simulation sets and the bellows' crushing;
+* :mod:`.maxwell`: the Maxwell dampers' internal states, stepped after every step;
+* :mod:`.solver`: the solver and the reuse of its Newton Jacobian;
+* :mod:`.outputs`: the quantities the car reports (wheel loads, wheel-rail forces, roll, ...);
+* :mod:`.linear`: the car linearised about steady running (contact guidance).
 
 Bodies: carbody, two bogie frames, four wheelsets (rigid, 6 coordinates each, Tait-Bryan xyz).
 Coordinates: x forward (running direction at the start), y to the left, z up; rail top at z = 0
@@ -75,7 +89,7 @@ transient.
 Force laws are exudyn symbolic user functions (they run in C++); their inputs (rail heights and
 rates, the bellow force law, the guidance frames) are named symbolic variables set from Python.
 
-Solver (:mod:`.jacobian`): implicit generalized-alpha (spectral radius
+Solver (:mod:`.solver`): implicit generalized-alpha (spectral radius
 :data:`SPECTRAL_RADIUS`), driven macro-step by macro-step with
 ``MainSolverImplicitSecondOrder.SolveSteps`` (state-exact continuation). The Newton Jacobian is
 kept across macro-steps while the step size is unchanged and the track heading has turned by
@@ -101,8 +115,10 @@ This package must not import ``pneumatics`` or ``cosim``.
 """
 from ..errors import Derailed
 from ..params import BELLOWS, WHEELS, ContactParams, TrackStructure, VehicleParams
-from .build import _SYMBOLIC_OPS
-from .model import EXUDYN_TESTED_MINOR, SPECTRAL_RADIUS, MetroCar
+from .model import EXUDYN_TESTED_MINOR, MetroCar
+from .options import SPECTRAL_RADIUS, CarOptions, ModelOptions, RunSettings, SolverSettings
+from .secondary import SYMBOLIC_OPS
 
-__all__ = ["MetroCar", "SPECTRAL_RADIUS", "EXUDYN_TESTED_MINOR", "WHEELS", "BELLOWS", "Derailed", "ContactParams",
-           "TrackStructure", "VehicleParams", "_SYMBOLIC_OPS"]
+__all__ = ["MetroCar", "CarOptions", "ModelOptions", "RunSettings", "SolverSettings", "SPECTRAL_RADIUS",
+           "EXUDYN_TESTED_MINOR", "WHEELS", "BELLOWS", "Derailed", "ContactParams", "TrackStructure",
+           "VehicleParams", "SYMBOLIC_OPS"]

@@ -99,15 +99,15 @@ class CarLinearisation:
 
 def _coordinate_names(car) -> List[Tuple[str, str]]:
     """(body, axis) of every system coordinate."""
-    mbs = car.mbs
-    names = [None] * car._solver.GetODE2size()
-    bodies = ([("carbody", car._carbody)] + [(f"bogie {i + 1}", b) for i, b in enumerate(car._bogies)]
-              + [(f"wheelset {i + 1}", b) for i, b in enumerate(car._wheelsets)])
+    mbs, model = car.mbs, car.model
+    names = [None] * car.solver.main.GetODE2size()
+    bodies = ([("carbody", model.carbody)] + [(f"bogie {i + 1}", b) for i, b in enumerate(model.bogies)]
+              + [(f"wheelset {i + 1}", b) for i, b in enumerate(model.wheelsets)])
     for name, body in bodies:
         i0 = int(mbs.GetNodeODE2Index(mbs.GetObject(body)["nodeNumber"]))
         for k, axis in enumerate(AXES):
             names[i0 + k] = (name, axis)
-    for i, node in enumerate(car._spin_nodes):
+    for i, node in enumerate(model.spin_nodes):
         names[int(mbs.GetNodeODE2Index(node))] = (f"wheelset {i + 1}", "spin")
     for i, name in enumerate(names):
         if name is None:
@@ -128,20 +128,20 @@ def steady_state(car, names=None) -> float:
     returns the largest reduced force left [N, N m]. ``names``: :func:`_coordinate_names` of the car."""
     names = names or _coordinate_names(car)
     spins = [i for i, (_, axis) in enumerate(names) if axis == "spin"]
-    return generic_steady_state(car.mbs, car._solver, spins)
+    return generic_steady_state(car.mbs, car.solver.main, spins)
 
 
 def _reaction(car, N: np.ndarray) -> float:
     """The largest constraint reaction at the current state: f = C_q^T lambda, least squares."""
-    C = constraint_jacobian(car.mbs, car._solver)
+    C = constraint_jacobian(car.mbs, car.solver.main)
     if C.shape[0] == 0:
         return 0.0
-    lam = np.linalg.lstsq(C.T, ode2_rhs(car.mbs, car._solver), rcond=None)[0]
+    lam = np.linalg.lstsq(C.T, ode2_rhs(car.mbs, car.solver.main), rcond=None)[0]
     return float(np.max(np.abs(lam)))
 
 
 def _crushing(car) -> np.ndarray:
-    car._bellow_t = None                                  # the cache is per time; the state moved
+    car.bellows.crushing_time_s = None                    # the cache is per time; the state moved
     return car.bellow_crushing()[0]
 
 
@@ -154,13 +154,13 @@ def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m, rail_inputs: bo
     level needs it, the eigenvalues do not)."""
     if getattr(car, "guidance", "") != "contact":
         raise ValueError("linearise_car needs a car with guidance='contact'")
-    mbs, solver = car.mbs, car._solver
+    mbs, solver = car.mbs, car.solver.main
     F0 = np.asarray(bellow_force_N, dtype=float).reshape(4)
     Kb = np.asarray(bellow_stiffness_N_per_m, dtype=float).reshape(4)
     car.set_bellow_forces(F0, Kb, np.zeros(4))
-    if car._maxwell:                                      # the element's continuous law k_s (d - y)
-        car._h_step.SetValue(0.0)
-        for d in car._maxwell:
+    if car.maxwell.active:                                # the element's continuous law k_s (d - y)
+        car.maxwell.step_size.SetValue(0.0)
+        for d in car.maxwell.dampers:
             d.y_sym.SetValue(d.y)
             d.ydot_sym.SetValue(0.0)
     names = _coordinate_names(car)
@@ -179,7 +179,7 @@ def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m, rail_inputs: bo
 
     B = np.empty((N.shape[1], 4))
     Zu = np.empty((4, 4))
-    anchor = [law[3] for law in car._bellow_law]       # z_n of the law: every variation keeps it
+    anchor = [law[3] for law in car.bellows.laws]      # z_n of the law: every variation keeps it
     for k in range(4):
         def apply(sign, k=k):
             F = F0.copy()
@@ -195,7 +195,7 @@ def linearise_car(car, bellow_force_N, bellow_stiffness_N_per_m, rail_inputs: bo
 
     q0 = np.array(mbs.systemData.GetODE2Coordinates())
     h = 1e-7                                              # [m, rad]: the crushing is smooth in the positions
-    maxwell = list(car._maxwell)
+    maxwell = list(car.maxwell.dampers)
     get = mbs.GetObjectOutput
     Z = np.empty((4, N.shape[1]))
     Wd = np.empty((len(maxwell), N.shape[1]))
@@ -228,14 +228,15 @@ RAIL_STEP_M, RAIL_RATE_STEP_M_PER_S = 1e-7, 1e-5
 def _rail_inputs(car, force_difference) -> tuple[np.ndarray, np.ndarray]:
     """(n, 4) generalized forces per metre and per m/s of both rails of each wheelset moving up
     (central differences of the contact law through its rails' offsets and rates)."""
-    frames = car._track_at(car._t)[:4]
+    frames = car.track_input.rows(car.t_s)[:4]
+    law = car.contact.track_contact
     columns = ([], [])
     for which, h in ((2, RAIL_STEP_M), (3, RAIL_RATE_STEP_M_PER_S)):
         for i in range(4):
             def apply(sign, i=i, which=which, h=h):
                 side = [0.0, 0.0, 0.0, 0.0]
                 side[which] = sign * h
-                car._wr.set_track(frames, [(tuple(side), tuple(side)) if j == i else ((0.0,) * 4, (0.0,) * 4)
-                                           for j in range(4)])
+                law.set_track(frames, [(tuple(side), tuple(side)) if j == i else ((0.0,) * 4, (0.0,) * 4)
+                                       for j in range(4)])
             columns[which - 2].append(force_difference(apply) / (2.0 * h))
     return np.array(columns[0]).T, np.array(columns[1]).T

@@ -1,0 +1,137 @@
+"""What a :class:`~vehicle.car.MetroCar` is asked for, in three groups: what is built
+(:class:`ModelOptions`), how the car runs (:class:`RunSettings`) and how it is integrated
+(:class:`SolverSettings`), held together by :class:`CarOptions`, which also reads them from
+``MetroCar``'s keywords. Each field is documented at :class:`~vehicle.car.MetroCar`."""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..params import ContactParams, TrackStructure
+from ..track import TrackGeometry
+
+#: default spectral radius of the implicit integrator (generalized-alpha) at infinite frequency.
+#: A linear cant ramp steps the rails' roll rate and rings each wheelset's ~240 Hz roll on its
+#: contacts (omega h ~ 7.5 at 5 ms): with 0.8 those impacts were integrated unstably on canted
+#: track (balanced and excess cant on the paper's curve diverged, kinematic and contact
+#: guidance); 0.5 damps them within a few steps and runs every case of the cant x speed x radius
+#: x transition matrix (benchmarks/track_matrix.py), while the converged results of the
+#: paper's scenarios move by less than their own discretisation error (docs/models.md,
+#: "Numerical damping").
+SPECTRAL_RADIUS = 0.5
+
+#: Newton's relative tolerance with contact guidance. A step's initial residual is ~M a
+#: there (~30 kN in the paper's curve) against ~700 kN with kinematic guidance, where the
+#: guidance constraints dominate it, so 1e-8 asked the contact for ~3e-4 N, 20 times the
+#: kinematic car's ~7e-3 N, and took 5.0 Newton iterations per step against 3.2. 1e-6
+#: (~3e-2 N) takes 3.9 and moves the wheel loads and lateral forces of that curve by at most
+#: 0.05 N (roll 7e-9 rad), against ~10 N between 5 and 2.5 ms steps (pneumorail verify).
+CONTACT_NEWTON_REL_TOL = 1e-6
+
+
+#: the ways the wheelsets can be held on the track (``guidance``)
+GUIDANCES = ("kinematic", "contact")
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """What is built: the guidance, its contact, the track structure, the optional carbody load
+    and the wheelsets' initial lateral offsets. ``track_structure`` None becomes the rigid
+    :class:`~vehicle.params.TrackStructure`."""
+
+    guidance: str = "kinematic"
+    contact: ContactParams | None = None
+    track_structure: TrackStructure | None = None
+    carbody_load: bool = False
+    wheelset_lateral_offset_m: Sequence[float] | None = None
+
+    def __post_init__(self):
+        if self.guidance not in GUIDANCES:
+            raise ValueError(f"guidance must be 'kinematic' or 'contact', got {self.guidance!r}")
+        if self.track_structure is None:
+            object.__setattr__(self, "track_structure", TrackStructure())
+
+    @property
+    def contact_guidance(self) -> bool:
+        """The wheelsets run on the wheel-rail contact (``guidance="contact"``)."""
+        return self.guidance == "contact"
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """How the car runs: along which track, how fast, from where, and what the rails under it
+    do (prescribed heights, irregularities)."""
+
+    track: TrackGeometry | None = None
+    speed_m_per_s: float = 0.0
+    start_s_m: float | None = None
+    deceleration: tuple[float, float] | None = None
+    rail_height_m: Callable[[float], np.ndarray] | None = None
+    irregularity: Callable[[np.ndarray], tuple] | None = None
+
+    def __post_init__(self):
+        if self.irregularity is not None and not callable(self.irregularity):
+            raise ValueError("irregularity must be callable: irregularity(s_m) -> (lateral_m, "
+                             "vertical_m, cross_level_m, gauge_m)")
+        if not math.isfinite(self.speed_m_per_s):
+            raise ValueError(f"speed_m_per_s must be finite, got {self.speed_m_per_s!r}")
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """How the car is integrated: the largest internal step [s], the generalized-alpha spectral
+    radius, Newton's tolerances (``newton_rel_tol`` None: chosen by the guidance) and the reuse of
+    the Newton Jacobian."""
+
+    step_s: float = 5e-3
+    spectral_radius: float = SPECTRAL_RADIUS
+    newton_abs_tol: float = 1e-4
+    newton_rel_tol: float | None = None
+    reuse_jacobian: bool = True
+
+    def __post_init__(self):
+        if not self.step_s > 0.0:
+            raise ValueError(f"step_s must be > 0, got {self.step_s}")
+        object.__setattr__(self, "step_s", float(self.step_s))
+
+    def relative_tolerance(self, contact_guidance: bool) -> float:
+        """Newton's relative tolerance: ``newton_rel_tol``, or for None 1e-8 with kinematic
+        guidance, :data:`CONTACT_NEWTON_REL_TOL` with contact guidance."""
+        if self.newton_rel_tol is not None:
+            return self.newton_rel_tol
+        return CONTACT_NEWTON_REL_TOL if contact_guidance else 1e-8
+
+
+@dataclass(frozen=True)
+class CarOptions:
+    """Everything a car is built and run with besides its :class:`~vehicle.params.VehicleParams`."""
+
+    model: ModelOptions = field(default_factory=ModelOptions)
+    run: RunSettings = field(default_factory=RunSettings)
+    solver: SolverSettings = field(default_factory=SolverSettings)
+
+    @classmethod
+    def given(cls, options: CarOptions | None, keywords: dict) -> CarOptions:
+        """``options``, or for None the options from the ``keywords`` (:meth:`from_keywords`);
+        TypeError when both are given."""
+        if options is None:
+            return cls.from_keywords(**keywords)
+        if keywords:
+            raise TypeError("MetroCar() takes its options either as keywords or as options=, not both")
+        return options
+
+    @classmethod
+    def from_keywords(cls, **keywords) -> CarOptions:
+        """The options from ``MetroCar``'s flat keywords, each the name of a field of one of the
+        three groups (TypeError for any other, as for an unknown keyword of a function)."""
+        groups = {}
+        for name, group in (("model", ModelOptions), ("run", RunSettings), ("solver", SolverSettings)):
+            names = [f.name for f in dataclasses.fields(group) if f.name in keywords]
+            groups[name] = group(**{n: keywords.pop(n) for n in names})
+        if keywords:
+            raise TypeError(f"MetroCar() got unexpected keyword argument(s) {', '.join(map(repr, keywords))}")
+        return cls(**groups)
