@@ -13,7 +13,7 @@ two changes:
 * each bellow connector's ``springForceTorqueUserFunction`` (the co-simulation's force law
   F(t, z) = F_s + (F_e - F_s)(t - t_n)/H + K (z - z_n)) is replaced by a Python function with the
   same geometry that returns [k_s d_x, k_s d_y, -F, 0, 0, 0] with F = circuit.bellow_forces_N(x, z),
-  x the current first-order coordinates and z = h0 - d_z (see ``MetroCar._add_airspring``).
+  x the current first-order coordinates and z = h0 - d_z (see ``vehicle.car.secondary.add_airsprings``).
 
 Nothing is exchanged at macro-step boundaries: the force the car feels and the state of the air
 are evaluated together, at every Newton iterate of every step.
@@ -153,8 +153,8 @@ class MonolithicCar:
         self.scale = state_scale(c)
         x0 = cosim.x[:, 0].copy()
 
-        # the bellows, as MetroCar._add_airspring builds them (private there: see the report's hook)
-        self._h0 = car._bellow_height_m
+        # the bellows, as vehicle.car.secondary.add_airsprings builds them
+        self._h0 = car.bellow_height_m
         self._ks = car.params.bellow_shear_stiffness_N_per_m
         self._bellows = list(car._bellows)
 
@@ -211,7 +211,7 @@ class MonolithicCar:
         z = h0 - d_z, d the connector's DisplacementLocal, exactly as the force law and
         ``MetroCar.bellow_crushing``. Its rate is the exact time derivative of that z: the
         directional derivative of z(q) along the velocity, (z(q + e qdot) - z(q - e qdot)) / 2e
-        (z depends on the positions only). ``MetroCar._bellow_state``'s closed form (relative
+        (z depends on the positions only). ``vehicle.car.bellows.BellowLaws``'s closed form (relative
         velocity in the mid-frame minus w x d) is the derivative of d expressed in the mid-frame,
         but exudyn's intrinsic d is the translation of the SE(3) logarithm of the relative motion,
         which differs from it at second order in the relative rotation (-[theta]x^2 d / 24):
