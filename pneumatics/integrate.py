@@ -30,7 +30,7 @@ def stable_step_s(circuit: Circuit, x: np.ndarray, h_max_s: float = 1e-3, couran
     that mode by 0.27 instead of exp(-1.5) = 0.22: a fast transient decaying a little slower, with
     the slow thermal state itself unaffected. ``h_max_s`` bounds the step for the pipe mode.
     """
-    k = circuit._k_finite
+    k = circuit.assembly.heat.k_finite_W_per_K
     if not np.any(k > 0):
         return h_max_s
     m = x[circuit.layout.m]

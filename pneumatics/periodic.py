@@ -79,7 +79,7 @@ def periodic_steady_state(circuit: Circuit, x_start: np.ndarray, period_s: np.nd
     """
     lay = circuit.layout
     nd, n_cases = lay.n_dynamic, x_start.shape[1]
-    closed = not np.any(circuit._boundary_sign)
+    closed = not np.any(circuit.assembly.links.boundary_sign)
     free = np.arange(nd)
     if closed:
         free = free[free != lay.m.start]       # mass of the first chamber follows from the total
@@ -128,10 +128,10 @@ def periodic_steady_state(circuit: Circuit, x_start: np.ndarray, period_s: np.nd
         for i, j in enumerate(free):
             dY = (Y[:nd, (i + 1) * n_cases:(i + 2) * n_cases] - Y[:nd, :n_cases])[free] / scale[free, None]
             mono[:, :, i] = (dY / (eps[i] / scale[j])).T
-        if circuit._any_isothermal:
+        if circuit.assembly.heat.any_isothermal:
             # Held temperatures are not states of an isothermal case: drop them from the map.
             held = np.isin(free, np.arange(lay.T.start, lay.T.stop))
-            iso = np.broadcast_to(circuit._isothermal, (n_cases,))
+            iso = np.broadcast_to(circuit.assembly.heat.isothermal, (n_cases,))
             mono[np.ix_(iso, held, np.arange(nf))] = 0.0
             mono[np.ix_(iso, np.arange(nf), held)] = 0.0
         mono[~np.isfinite(mono)] = np.nan

@@ -1,0 +1,144 @@
+"""The numbers of each flow law, gathered over the links that obey it, as the evaluation of the
+circuit reads them: dynamic and quasi-steady pipes (eq. 5), the ISO 6358 links (eqs 6-7: fixed
+orifices, faults' openings, valve sides; one call serves them all), differential valves, and the
+levelling valves' levers and conductance tables."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Tuple
+
+import numpy as np
+
+from .arrays import column, read_only, rows, table_groups
+from .links import Links
+from .nodes import Nodes
+from .valve_dynamics import ValveDynamics, compile_valve_dynamics
+
+
+@dataclass(frozen=True, eq=False)
+class DynamicPipes:
+    """Pipes whose flow is a state (eq. 5): their links (the first ones, in the order of the
+    pipe-flow states), their ends' node rows, and each pipe's L, A, K (pipes, 1)."""
+
+    links: slice
+    a: object
+    b: object
+    length_m: np.ndarray
+    area_m2: np.ndarray
+    loss_coefficient: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class QuasiSteadyPipes:
+    """Pipes at steady state (eq. 5 without dq/dt): how many, their links, each pipe's A and K."""
+
+    count: int
+    links: slice
+    area_m2: np.ndarray
+    loss_coefficient: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class OrificeLinks:
+    """The links whose flow is ISO 6358's (eqs 6-7): fixed orifices, faults' openings, then the
+    valves' supply and exhaust sides. Their link rows and ends' node rows; the conductances of
+    the first ``n_fixed`` (fixed orifices, then openings: 0 while shut) (n_fixed, 1); every
+    link's critical ratio b (links, 1)."""
+
+    links: object
+    a: object
+    b: object
+    n_fixed: int
+    fixed_C_m3_per_sPa: np.ndarray
+    b_critical: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class DifferentialValves:
+    """Differential valves, one group per distinct flow table: (link rows, a-end node rows, b-end
+    node rows, dp table, q table)."""
+
+    tables: Tuple[tuple, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class LevellingValves:
+    """The levelling (and safety) valves: names; their links (supply sides, then exhaust sides);
+    their supply and exhaust conductance tables,
+    grouped by distinct table ((valve rows, lever table, C table)); the lever matrix (valves,
+    bellows), u = lever @ z (lever_gain x mean crushing of the sensed bellows), and its rows of
+    the valves with a play; their response dynamics."""
+
+    names: Tuple[str, ...]
+    links: slice
+    supply_tables: tuple
+    exhaust_tables: tuple
+    lever: np.ndarray
+    lever_play: np.ndarray
+    dynamics: ValveDynamics
+
+    @property
+    def count(self) -> int:
+        return len(self.names)
+
+
+def compile_dynamic_pipes(links: Links) -> DynamicPipes:
+    """The numbers of eq. (5) over the dynamic pipes."""
+    sl = links.rows["pipe"]
+    L, A, K = _columns(links.parameters["pipe"], 3)
+    return DynamicPipes(sl, rows(links.a[sl]), rows(links.b[sl]), L, A, K)
+
+
+def compile_quasi_steady_pipes(links: Links) -> QuasiSteadyPipes:
+    """The numbers of eq. (5) at steady state over the quasi-steady pipes."""
+    parameters = links.parameters["quasi_steady_pipe"]
+    return QuasiSteadyPipes(len(parameters), links.rows["quasi_steady_pipe"], *_columns(parameters, 2))
+
+
+def compile_orifice_links(links: Links) -> OrificeLinks:
+    """The numbers of eqs (6-7) over the fixed orifices, the faults' openings and the valve sides."""
+    fixed = links.parameters["orifice"] + links.parameters["fault_opening"]
+    sides = links.parameters["valve_supply"] + links.parameters["valve_exhaust"]
+    fixed_rows = slice(links.rows["orifice"].start, links.rows["fault_opening"].stop)
+    side_rows = valve_sides(links)
+    idx = np.r_[np.arange(fixed_rows.start, fixed_rows.stop), np.arange(side_rows.start, side_rows.stop)].astype(int)
+    return OrificeLinks(rows(idx), rows(links.a[idx]), rows(links.b[idx]), len(fixed), column([C for C, _ in fixed]),
+                        column([b for *_, b in fixed + sides]))
+
+
+def compile_differential_valves(links: Links) -> DifferentialValves:
+    """The differential valves grouped by distinct flow table."""
+    sl = links.rows["differential"]
+    groups = ((sl.start + np.arange(sl.stop - sl.start)[members], dp, q)
+              for members, dp, q in table_groups(links.parameters["differential"]))
+    return DifferentialValves(tuple((rows(idx), rows(links.a[idx]), rows(links.b[idx]), dp, q) for idx, dp, q in groups))
+
+
+def compile_levelling_valves(links: Links, nodes: Nodes) -> LevellingValves:
+    """The valves of ``links``; every sensed bellow a bellow of the circuit."""
+    valves = [valve for _, valve in links.sources["valve_supply"]]
+    names = tuple(links.names_of("valve_supply"))
+    lever = np.zeros((len(valves), len(nodes.bellow_names)))
+    for i, (name, valve) in enumerate(zip(names, valves)):
+        sensed = valve.sensed_bellows
+        for s in sensed:
+            lever[i, nodes.bellow(name, "sensed", s)] += valve.lever_gain / len(sensed)
+    dynamics = compile_valve_dynamics(valves)
+    return LevellingValves(names, valve_sides(links), _tables(links.parameters["valve_supply"]),
+                           _tables(links.parameters["valve_exhaust"]), read_only(lever), read_only(lever[dynamics.play_rows]),
+                           dynamics)
+
+
+def valve_sides(links: Links) -> slice:
+    """The links of the valves' sides: supply sides, then exhaust sides."""
+    return slice(links.rows["valve_supply"].start, links.rows["valve_exhaust"].stop)
+
+
+def _columns(parameters: Tuple[tuple, ...], n: int) -> list:
+    """The links' law numbers as ``n`` columns (links, 1), one per number."""
+    return [column([p[j] for p in parameters]) for j in range(n)]
+
+
+def _tables(parameters: Tuple[tuple, ...]) -> tuple:
+    """The valve sides' conductance tables grouped by distinct table."""
+    return table_groups([(lever, C) for lever, C, _ in parameters])

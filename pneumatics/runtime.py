@@ -1,0 +1,461 @@
+"""A compiled circuit evaluated at a state (:class:`CircuitRuntime`): the time derivative of the
+state vector, everything observable (pressures, flows, bellow forces and stiffnesses), the air's
+accounts and the checks that a state is physical.
+
+It holds the :class:`~pneumatics.assembly.Assembly` it was given, which nothing here changes
+(its arrays are read-only); its only state is two caches of values derived from it. The state
+vector's layout is :mod:`pneumatics.circuit`'s docstring. Inputs are the crushing z [m] and its
+rate of every bellow, in the order of ``bellow_names``; every array may carry a trailing case axis.
+"""
+from __future__ import annotations
+
+import functools
+import operator
+from dataclasses import dataclass
+from typing import Mapping, NamedTuple, Optional
+
+import numpy as np
+
+from .assembly import Assembly
+from .boundary import Supply
+from .chamber import (
+    bellow_force_N,
+    bellow_stiffness_N_per_m,
+    heat_flow_into_W,
+    isothermal_heat_flow_W,
+    temperature_rate_K_per_s,
+)
+from .errors import CircuitDiverged, CircuitError
+from .orifice import orifice_flow_kg_per_s
+from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
+from .valve_signals import lever_chain, set_at_rest, signal_rates
+from .valves import differential_valve_flow_kg_per_s, lever_conductance
+
+
+class ValveSides(NamedTuple):
+    """A per-valve quantity for each side: arrays (valves[, cases]) in the order of
+    :attr:`Circuit.valve_names`."""
+
+    supply: np.ndarray
+    exhaust: np.ndarray
+
+
+class Evaluation(NamedTuple):
+    """:meth:`Circuit.evaluate`: the circuit at one state and crushing, each (rows, cases):
+    chamber masses, temperatures, volumes, pressures; node pressures, temperatures, densities
+    (chambers, then boundary nodes); link flows; the valves' lever chain (or None); the valves'
+    conductances (supply sides, then exhaust)."""
+
+    m: np.ndarray
+    T: np.ndarray
+    V: np.ndarray
+    p: np.ndarray
+    p_n: np.ndarray
+    T_n: np.ndarray
+    rho_n: np.ndarray
+    w: np.ndarray
+    chain: Optional[tuple]
+    C_valve: np.ndarray
+
+
+@dataclass(frozen=True)
+class CircuitOutputs:
+    """Everything observable at one instant (arrays: chambers or links first, cases last)."""
+
+    p_Pa: np.ndarray
+    T_K: np.ndarray
+    m_kg: np.ndarray
+    V_m3: np.ndarray
+    link_flow_kg_per_s: np.ndarray
+    bellow_force_N: np.ndarray
+
+
+class CircuitRuntime:
+    """The circuit ``assembly`` evaluated at a state. Its public attributes name what the
+    circuit is made of (lists, in the order of the state vector's rows)."""
+
+    #: below this fraction of its nominal volume a chamber counts as crushed flat (non-physical)
+    MIN_VOLUME_FRACTION = 1e-3
+
+    def __init__(self, assembly: Assembly):
+        self.assembly = assembly
+        self.components = dict(assembly.components)
+        self.faults, self.active_faults = assembly.faults, assembly.active_faults
+        self.gas, self.atmosphere = assembly.gas, assembly.atmosphere
+        self.k_W_per_K = assembly.heat.k_W_per_K
+        self.layout = assembly.layout
+        nodes, links = assembly.nodes, assembly.links
+        self.chamber_names = list(nodes.chamber_names)
+        self.bellow_names = list(nodes.bellow_names)
+        self.boundary_names = list(nodes.boundary_names)
+        self.node_names = list(nodes.names)
+        self.link_names = list(links.names)
+        self.pipe_names = links.names_of("pipe")
+        self.valve_names = list(assembly.valves.names)
+        #: the links of the faults' openings to the atmosphere (what :meth:`air_lost_kg` counts)
+        self.fault_links = assembly.fault_links
+        # the assembly's parts, one attribute away
+        self._heat, self._nodes, self._chambers, self._links = assembly.heat, nodes, assembly.chambers, links
+        self._pipes, self._quasi_steady, self._orifices = assembly.pipes, assembly.quasi_steady_pipes, assembly.orifice_links
+        self._differential, self._valves, self._dynamics = assembly.differential_valves, assembly.valves, assembly.valves.dynamics
+        self._active = assembly.active
+        self._n_valves, self._n_bellows = len(self.valve_names), len(self.bellow_names)
+        self._boundary_columns = {}   # n_cases -> boundary columns repeated (cached)
+        self._outflow_signs = {}      # mass_from's link signs by node (cached)
+
+    # ----------------------------------------------------------------------------- state
+    def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
+        """State at rest with every bellow at z = 0: each chamber at its initial pressure, no flow.
+
+        ``p0_Pa`` overrides chamber initial pressures by name (e.g. bellow pressures that carry
+        the static load). Temperatures start at the component's ``T0_K`` or the atmosphere's.
+        ``n_cases`` returns a (size, n_cases) array (default: one column per k value, or 1-D).
+        """
+        p0_Pa = dict(p0_Pa or {})
+        unknown = set(p0_Pa) - set(self.chamber_names)
+        if unknown:
+            raise CircuitError([sorted(unknown)[0]], f"initial pressure given for a name that is not a chamber "
+                                                     f"(chambers: {self.chamber_names})")
+        lay = self.layout
+        x = np.zeros(lay.size)
+        for i, n in enumerate(self.chamber_names):
+            c = self.components[n]
+            p = p0_Pa.get(n, c.p_Pa if isinstance(c, Supply) else c.p0_Pa)
+            if p is None:
+                raise CircuitError([n, "p0_Pa"], "initial pressure is not set")
+            if not p > 0:
+                raise CircuitError([n, "p0_Pa"], f"must be > 0 (absolute pressure), got {p}")
+            T = getattr(c, "T0_K", None) or getattr(c, "T_K", None) or self.atmosphere.T_K
+            if np.any(self._heat.isothermal) and T != self.atmosphere.T_K:
+                raise CircuitError([n, "T0_K"], "an isothermal (k = inf) chamber must start at the atmosphere's temperature")
+            x[lay.T][i] = T
+            x[lay.m][i] = self.gas.mass_kg(p, T, self._chambers.V0_m3[i, 0])
+        if n_cases is None and self.k_W_per_K.ndim:
+            n_cases = self.k_W_per_K.size
+        return x if n_cases is None else np.repeat(x[:, None], n_cases, axis=1)
+
+    # ----------------------------------------------------------------------------- physics
+    def _boundary(self, n_cases: int):
+        """Boundary-node pressures, temperatures and fixed orifice conductances repeated over
+        ``n_cases`` (cached)."""
+        cols = self._boundary_columns.get(n_cases)
+        if cols is None:
+            nodes = self._nodes
+            cols = self._boundary_columns[n_cases] = tuple(
+                np.repeat(v, n_cases, axis=1) for v in (nodes.p_boundary_Pa, nodes.T_boundary_K,
+                                                        self._orifices.fixed_C_m3_per_sPa))
+        return cols
+
+    def _valve_chain(self, x2: np.ndarray, z2: np.ndarray):
+        """Lever signals (valves x cases) along the chain u -> play -> delay -> lag: (u, u_p, u_d, u_f).
+        Without valve dynamics all four are the same array u = lever @ z."""
+        u = self._valves.lever @ z2
+        if not self._dynamics.present:
+            return u, u, u, u
+        return lever_chain(self._dynamics, u, x2[self.layout.valve_signal])
+
+    def _evaluate(self, x2: np.ndarray, z2: np.ndarray):
+        """Pressures, volumes and link flows for a 2-D state (states x cases) and crushing (bellows
+        x cases); also the valves' lever chain and their conductances (supply sides, then exhaust)."""
+        gas, lay, chambers, links = self.gas, self.layout, self._chambers, self._links
+        m, T = x2[lay.m], x2[lay.T]
+        V = chambers.V0_m3 - chambers.Ez_m2 @ z2
+        p = m * gas.R_J_per_kgK * T / V                                          # eq. (3)
+        n_cases = x2.shape[1]
+        p_bnd, T_bnd, C_fixed = self._boundary(n_cases)
+        p_n, T_n = np.concatenate([p, p_bnd]), np.concatenate([T, T_bnd])
+        rho_n = p_n / (gas.R_J_per_kgK * T_n)
+        a, b = links.a, links.b
+        w = np.empty((len(a), n_cases))
+        w[self._pipes.links] = x2[lay.q]
+        qs = self._quasi_steady
+        if qs.count:
+            ia, ib = a[qs.links], b[qs.links]
+            w[qs.links] = pipe_flow_quasi_steady_kg_per_s(p_n[ia], p_n[ib], 0.5 * (rho_n[ia] + rho_n[ib]), qs.area_m2,
+                                                          qs.loss_coefficient)
+        for rows, ia, ib, xp, fp in self._differential.tables:
+            w[rows] = differential_valve_flow_kg_per_s(p_n[ia], p_n[ib], xp, fp)
+        orifices = self._orifices
+        C = np.empty((orifices.b_critical.shape[0], n_cases))   # fixed orifices, then valve supply and exhaust sides
+        C[:orifices.n_fixed] = C_fixed
+        C_valve = C[orifices.n_fixed:]
+        chain = self._valve_conductances(x2, z2, C_valve) if self._n_valves else None
+        if C.size:
+            ia, ib = orifices.a, orifices.b
+            w[orifices.links] = orifice_flow_kg_per_s(C, orifices.b_critical, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
+        blocked = self._active.blocked_links
+        if blocked is not None:                            # faults: links that carry nothing
+            w[blocked] = 0.0
+        return m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve
+
+    def _valve_conductances(self, x2: np.ndarray, z2: np.ndarray, C_valve: np.ndarray):
+        """Write the valves' conductances (supply sides, then exhaust) into ``C_valve`` and return
+        their lever chain (None without valve dynamics)."""
+        valves, chain = self._valves, None
+        if self._dynamics.present:
+            chain = self._valve_chain(x2, z2)
+            lever = chain[3]
+        else:
+            lever = valves.lever @ z2
+        active, nv = self._active, self._n_valves
+        if active.stuck_valves is not None:                # a stuck valve acts on its stuck lever
+            lever = lever.copy()
+            lever[active.stuck_valves] = active.stuck_lever_m
+        for tables, sign, side in ((valves.supply_tables, 1.0, C_valve[:nv]), (valves.exhaust_tables, -1.0, C_valve[nv:])):
+            for rows, xp, fp in tables:
+                side[rows] = lever_conductance(sign * lever[rows], xp, fp)
+        return chain
+
+    def _per_bellow(self, values, x2: np.ndarray) -> np.ndarray:
+        """A bellow input as (bellows, cases); a circuit without bellows takes an empty array."""
+        nb = self._n_bellows
+        return np.reshape(values, (nb, -1)) if nb else np.zeros((0, x2.shape[1]))
+
+    def derivatives(self, x, z_m, zdot_m_per_s) -> np.ndarray:
+        """d(state)/dt for state ``x`` (size,) or (size, cases) and bellow crushing and rate."""
+        x2, z2, zdot2 = self._inputs(x, z_m, zdot_m_per_s)
+        dx, terms = self._rates_at_crushing(x2, z2)
+        self._write_crushing_rate_terms(dx, x2, terms, zdot2)
+        return dx.reshape(x.shape)
+
+    def derivatives_and_held(self, x, z_m, zdot_m_per_s, evaluated: "Evaluation | None" = None
+                             ) -> tuple[np.ndarray, np.ndarray]:
+        """(d(state)/dt, d(state)/dt at zero crushing rate): the latter is ``derivatives(x, z_m, 0)``
+        bit for bit, from the same evaluation of the flows (they depend on the crushing only, not
+        on its rate); only the rows that the rate enters (temperatures through p dV/dt, heat and
+        work accumulators, valve signals) are computed twice. ``evaluated``: :meth:`evaluate` at
+        this very (x, z_m), when the caller has it already (the same numbers, not computed again)."""
+        x2, z2, zdot2 = self._inputs(x, z_m, zdot_m_per_s)
+        dx, terms = self._rates_at_crushing(x2, z2, evaluated)
+        held = dx.copy()
+        self._write_crushing_rate_terms(dx, x2, terms, zdot2)
+        self._write_crushing_rate_terms(held, x2, terms, np.zeros_like(zdot2))
+        return dx.reshape(x.shape), held.reshape(x.shape)
+
+    def _inputs(self, x, z_m, zdot_m_per_s):
+        """State (states x cases), crushing and its rate (bellows x cases)."""
+        x2 = x.reshape(self.layout.size, -1)
+        return x2, self._per_bellow(z_m, x2), self._per_bellow(zdot_m_per_s, x2)
+
+    def _rates_at_crushing(self, x2: np.ndarray, z2: np.ndarray, evaluated: "Evaluation | None" = None):
+        """The rows of d(state)/dt that depend on the state and the crushing only (chamber masses,
+        pipe flows, link mass, boundary enthalpy, valve open times), and the terms the other rows
+        need: (dx with those rows written, (m, T, p, mdot, Hdot, chain))."""
+        lay, links, pipes = self.layout, self._links, self._pipes
+        m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = evaluated or self._evaluate(x2, z2)
+        a, b = links.a, links.b
+        Hw = w * (self.gas.cp_J_per_kgK * np.where(w >= 0.0, T_n[a], T_n[b]))  # upstream total enthalpy
+        mdot = links.incidence @ w                                              # eq. (1)
+        Hdot = links.incidence @ Hw
+        dx = np.empty_like(x2)
+        dx[lay.m] = mdot
+        pa, pb = pipes.a, pipes.b
+        dx[lay.q] = pipe_flow_rate_kg_per_s2(x2[lay.q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
+                                             pipes.length_m, pipes.area_m2, pipes.loss_coefficient)  # eq. (5)
+        blocked_pipes = self._active.blocked_pipes
+        if blocked_pipes is not None:                     # a blocked pipe's air column stands still
+            dx[lay.q][blocked_pipes] = 0.0
+        dx[lay.mass_through] = w
+        dx[lay.enthalpy_in] = links.boundary_sign @ Hw
+        if self._n_valves:
+            np.sign(C_valve, out=dx[lay.open_time])  # C >= 0 (tables checked): 1 while open, 0 when shut
+        return dx, (m, T, p, mdot, Hdot, chain)
+
+    def _write_crushing_rate_terms(self, dx: np.ndarray, x2: np.ndarray, terms, zdot2: np.ndarray) -> None:
+        """Write the rows of d(state)/dt that the crushing rate enters: temperatures (eq. 2, with
+        the heat flow of eq. 8 or the isothermal one), heat and work accumulators, valve signals."""
+        lay, heat = self.layout, self._heat
+        m, T, p, mdot, Hdot, chain = terms
+        cv = self.gas.cv_J_per_kgK
+        Vdot = -self._chambers.Ez_m2 @ zdot2
+        Qdot = heat_flow_into_W(heat.k_finite_W_per_K, T, self.atmosphere.T_K)   # eq. (8), physical sign
+        if heat.any_isothermal:
+            Qdot = np.where(heat.isothermal, isothermal_heat_flow_W(T, p, mdot, Hdot, Vdot, cv), Qdot)
+        dT = temperature_rate_K_per_s(m, T, p, mdot, Hdot, Qdot, Vdot, cv)       # eq. (2)
+        if heat.any_isothermal:
+            dT = np.where(heat.isothermal, 0.0, dT)
+        dx[lay.T] = dT
+        dx[lay.heat_in] = Qdot.sum(axis=0)
+        dx[lay.work_in] = -(p * Vdot).sum(axis=0)
+        if self._dynamics.present:
+            dx[lay.valve_signal] = signal_rates(self._dynamics, x2[lay.valve_signal], chain, self._valves.lever_play, zdot2)
+
+    def evaluate(self, x, z_m) -> "Evaluation":
+        """The circuit at state ``x`` and crushing ``z_m`` (pressures, volumes, flows: everything
+        but the terms of the crushing rate), to hand to :meth:`outputs` and
+        :meth:`derivatives_and_held` at this same (x, z_m), which then do not compute it again
+        (the co-simulation samples a state and starts the next macro-step from it). Read only."""
+        x2 = x.reshape(self.layout.size, -1)
+        return Evaluation(*self._evaluate(x2, self._per_bellow(z_m, x2)))
+
+    def outputs(self, x, z_m, evaluated: "Evaluation | None" = None) -> CircuitOutputs:
+        """Pressures, temperatures, masses, volumes, link flows and bellow forces (eq. 4).
+        ``evaluated``: :meth:`evaluate` at this very (x, z_m), if the caller has it."""
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z_m, x2)
+        m, T, V, p, _, _, _, w, _, _ = evaluated or self._evaluate(x2, z2)
+        F = self.bellow_forces_N(x2, z2)
+        squeeze = (lambda v: v[:, 0]) if x.ndim == 1 else (lambda v: v)
+        return CircuitOutputs(*(squeeze(v) for v in (p, T, m, V, w, F)))
+
+    def chamber_states(self, x, z_m) -> tuple[np.ndarray, np.ndarray]:
+        """(absolute pressure [Pa], temperature [K]) of every chamber, each (chambers, cases),
+        at state ``x`` and bellow crushing ``z_m`` (cheap: no flows)."""
+        lay, chambers = self.layout, self._chambers
+        x2 = x.reshape(lay.size, -1)
+        z2 = self._per_bellow(z_m, x2)
+        T = x2[lay.T]
+        return x2[lay.m] * self.gas.R_J_per_kgK * T / (chambers.V0_m3 - chambers.Ez_m2 @ z2), T
+
+    # ----------------------------------------------------------------------------- bellows
+    def bellow_volume_fractions(self, z_m) -> np.ndarray:
+        """Volume of each bellow over its nominal volume at crushing ``z_m`` (bellows[, cases])."""
+        chambers = self._chambers
+        z = np.asarray(z_m, dtype=float)
+        idx = chambers.bellow_chamber
+        z2 = z.reshape(len(idx), -1)
+        V0 = chambers.V0_m3[idx].reshape(len(idx), 1)
+        return ((V0 - chambers.Ez_m2[idx] @ z2) / V0).reshape(z.shape)
+
+    def bellow_pressures_Pa(self, x2, z2) -> np.ndarray:
+        chambers, lay = self._chambers, self.layout
+        idx = chambers.bellow_chamber
+        V = chambers.V0_m3[idx] - chambers.Ez_m2[idx] @ z2
+        return x2[lay.m][idx] * self.gas.R_J_per_kgK * x2[lay.T][idx] / V
+
+    def bellow_forces_N(self, x, z_m) -> np.ndarray:
+        """Eq. (4) for every bellow; shapes follow ``z_m`` (bellows[, cases])."""
+        chambers = self._chambers
+        z = np.asarray(z_m, float)
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z, x2)
+        if chambers.area_tables:
+            A = np.stack([self.components[b].area_m2(z2[i]) for i, b in enumerate(self.bellow_names)])
+        else:
+            A = chambers.A0_m2 + chambers.dA_dz_m * z2
+        F = bellow_force_N(A, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
+        return F.reshape(z.shape)
+
+    def bellow_stiffness_N_per_m(self, x, z_m) -> np.ndarray:
+        """Instantaneous dF/dz of each bellow (air in the pipe cannot move instantly): adiabatic,
+        or isothermal when k = inf. The co-simulation master uses it to linearise the force over a step."""
+        z = np.asarray(z_m, float)
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z, x2)
+        p = self.bellow_pressures_Pa(x2, z2)
+        n = np.where(self._heat.isothermal, 1.0, self.gas.gamma)
+        if self._chambers.area_tables:
+            K = np.stack([bellow_stiffness_N_per_m(self.components[b], z2[i], p[i], self.atmosphere.p_Pa, n)
+                          for i, b in enumerate(self.bellow_names)])
+        else:
+            K = bellow_stiffness_N_per_m(self._chambers.bellow_columns, z2, p, self.atmosphere.p_Pa, n)
+        return K.reshape(z.shape)
+
+    # ----------------------------------------------------------------------------- air accounts
+    def total_mass_kg(self, x) -> np.ndarray:
+        """Air in all chambers [kg], per case: added chamber by chamber, in order (numpy's sum
+        orders one column differently from several: the last bit would depend on how many cases
+        a circuit batches)."""
+        return functools.reduce(operator.add, x[self.layout.m])
+
+    def mass_from(self, x, node: str) -> np.ndarray:
+        """Cumulative mass that left boundary node ``node`` into the circuit (negative: received)
+        [kg], through every link but the faults' openings (:meth:`air_lost_kg` counts those)."""
+        sign = self._outflow_signs.get(node)
+        if sign is None:
+            i = self._nodes.index[node]
+            sign = (self._links.a == i).astype(float) - (self._links.b == i).astype(float)
+            sign[self.fault_links] = 0.0
+            self._outflow_signs[node] = sign
+        return sign @ x[self.layout.mass_through]
+
+    def link_ends(self) -> list:
+        """(a node, b node) of every link, in the order of :attr:`link_names`: a positive flow
+        goes from a to b."""
+        return [(self.node_names[i], self.node_names[j]) for i, j in zip(self._links.a, self._links.b)]
+
+    def net_inflow_kg(self, x) -> np.ndarray:
+        """Cumulative air that entered the chambers from outside [kg], per case: from every
+        boundary node (the atmosphere, fixed supplies) minus what the faults' openings lost. The
+        air in the chambers changes by exactly this (a finite supply is a chamber: what it
+        delivers is moved, not gained)."""
+        inflow = sum(self.mass_from(x, node) for node in self.boundary_names)
+        return inflow - self.air_lost_kg(x)
+
+    def air_lost_kg(self, x) -> np.ndarray:
+        """Cumulative air lost to the atmosphere through the faults' openings (bursts, leaks,
+        ruptured pipes) [kg], per case; 0 without such faults."""
+        return x[self.layout.mass_through][self.fault_links].sum(axis=0)
+
+    # ----------------------------------------------------------------------------- valves
+    def valve_air_kg(self, x) -> ValveSides:
+        """Cumulative air through each valve's sides [kg], arrays (valves[, cases]): ``supply`` from
+        the supply into the bellow, ``exhaust`` from the bellow to the exhaust. Net values: a side
+        that lets air pass backwards (bellow above supply pressure) counts it negative."""
+        through = x[self.layout.mass_through][self._valves.links]
+        nv = len(self.valve_names)
+        return ValveSides(through[:nv], through[nv:])
+
+    def valve_open_time_s(self, x) -> ValveSides:
+        """Cumulative time each valve side has been open (conductance > 0) [s], arrays
+        (valves[, cases]). Integrated with the state, so a fixed RK4 step resolves an opening or
+        closing instant to within one step."""
+        t = x[self.layout.open_time]
+        nv = len(self.valve_names)
+        return ValveSides(t[:nv], t[nv:])
+
+    def valve_lever_m(self, x, z_m) -> np.ndarray:
+        """Lever displacement each valve acts on, u_f, after play, delay and lag [m], shaped
+        (valves[, cases]) like ``x``: positive opens the supply side, negative the exhaust side."""
+        x2 = x.reshape(self.layout.size, -1)
+        u_f = self._valve_chain(x2, self._per_bellow(z_m, x2))[3]
+        return u_f[:, 0] if x.ndim == 1 else u_f
+
+    def valves_at_rest(self, x, z_m) -> np.ndarray:
+        """A copy of ``x`` whose valve-signal states are at rest at crushing ``z_m``: play, every
+        delay stage and lag equal to the lever displacement u = lever_gain x mean crushing, as if
+        the crushing had been held for ever. (Circuit.initial_state is at rest at z = 0.)"""
+        x = np.array(x, dtype=float)
+        if not self._dynamics.present:
+            return x
+        x2 = x.reshape(self.layout.size, -1)
+        set_at_rest(self._dynamics, x2[self.layout.valve_signal], self._valves.lever @ self._per_bellow(z_m, x2))
+        return x
+
+    # ----------------------------------------------------------------------------- checks
+    def physical_margin(self, x, z_m) -> float:
+        """> 0 while every chamber keeps a positive mass, temperature and more than
+        MIN_VOLUME_FRACTION of its volume; crosses zero when one of them stops being physical."""
+        lay, chambers = self.layout, self._chambers
+        x2 = x.reshape(lay.size, -1)
+        V = chambers.V0_m3 - chambers.Ez_m2 @ self._per_bellow(z_m, x2)
+        return float(min(np.min(x2[lay.m]), np.min(x2[lay.T]), np.min(V / chambers.V0_m3) - self.MIN_VOLUME_FRACTION))
+
+    def physical_cases(self, x) -> np.ndarray:
+        """(cases,) True where :meth:`check_state` would pass: finite positive masses and
+        temperatures, finite pipe flows and valve signals (one vectorised test over every case)."""
+        lay = self.layout
+        x2 = x.reshape(lay.size, -1)
+        chambers = x2[:lay.T.stop]                    # masses then temperatures
+        ok = np.all(chambers > 0.0, axis=0) & np.all(np.isfinite(chambers), axis=0)
+        return ok & np.all(np.isfinite(x2[lay.q]), axis=0) & np.all(np.isfinite(x2[lay.valve_signal]), axis=0)
+
+    def check_state(self, x, t_s: float) -> None:
+        """Raise :class:`CircuitDiverged` naming the component if a state is non-finite or non-physical."""
+        lay = self.layout
+        x2 = x.reshape(lay.size, -1)
+        bad_m = ~np.isfinite(x2[lay.m]) | (x2[lay.m] <= 0)
+        bad_T = ~np.isfinite(x2[lay.T]) | (x2[lay.T] <= 0)
+        bad_q = ~np.isfinite(x2[lay.q])
+        for bad, names, what in ((bad_m, self.chamber_names, "mass"), (bad_T, self.chamber_names, "temperature"),
+                                 (bad_q, self.pipe_names, "pipe flow")):
+            if np.any(bad):
+                i, case = map(int, np.argwhere(bad)[0])
+                state = {"case": case, "m_kg": x2[lay.m][i, case], "T_K": x2[lay.T][i, case]} if what != "pipe flow" \
+                    else {"case": case, "q_kg_per_s": x2[lay.q][i, case]}
+                raise CircuitDiverged(t_s, names[i], state, f"{what} is not finite and positive")
+        bad_u = ~np.isfinite(x2[lay.valve_signal])
+        if np.any(bad_u):
+            i, case = map(int, np.argwhere(bad_u)[0])
+            raise CircuitDiverged(t_s, self.valve_names[self._dynamics.valve_of_state(i)],
+                                  {"case": case, "u_m": x2[lay.valve_signal][i, case]}, "valve lever signal is not finite")
