@@ -145,7 +145,8 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--out", type=Path, default=None, help="output folder (default: beside the file, comfort_<its name>)")
     i = sub.add_parser("identify", help="fit scenario keys (k first) to measured rig data, with 95 %% intervals "
                                         "(docs/identify.md)")
-    i.add_argument("scenario", type=Path, help="a rig scenario of an identifiable kind (a time history or a stiffness table; others are refused, naming them)")
+    i.add_argument("scenario", type=Path, help="a rig scenario of an identifiable kind (a time history or a "
+                                               "stiffness table; others are refused, naming them)")
     i.add_argument("--data", type=Path, default=None, help="CSV: t_s, z_m and any of F_bellow_N, p_bellow_Pa, p_tank_Pa, "
                                                            "T_bellow_K, T_tank_K; or a stiffness table")
     i.add_argument("--fit", default="k_W_per_K", metavar="KEY[,KEY ...]",

@@ -39,6 +39,16 @@ from dataclasses import dataclass
 
 #: Bellows (airsprings): front/rear bogie, left/right in the running direction.
 BELLOWS = ("FL", "FR", "RL", "RR")
+#: default spectral radius of the implicit integrator (generalized-alpha) at infinite frequency.
+#: A linear cant ramp steps the rails' roll rate and rings each wheelset's ~240 Hz roll on its
+#: contacts (omega h ~ 7.5 at 5 ms): with 0.8 those impacts were integrated unstably on canted
+#: track (balanced and excess cant on the paper's curve diverged, kinematic and contact
+#: guidance); 0.5 damps them within a few steps and runs every case of the cant x speed x radius
+#: x transition matrix (benchmarks/track_matrix.py), while the converged results of the
+#: paper's scenarios move by less than their own discretisation error (docs/models.md,
+#: "Numerical damping").
+SPECTRAL_RADIUS = 0.5
+
 #: Wheels: wheelset 1..4 from the front, left/right in the running direction.
 WHEELS = ("1L", "1R", "2L", "2R", "3L", "3R", "4L", "4R")
 #: wheelsets, "1" ... "4" from the front (from the wheel names)

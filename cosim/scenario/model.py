@@ -18,7 +18,7 @@ from pneumatics.faults import Fault
 from pneumatics.layouts import car_circuit
 from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
-from vehicle.params import TrackStructure, VehicleParams
+from vehicle.params import SPECTRAL_RADIUS, TrackStructure, VehicleParams
 
 #: default length of the final window the quasi-static end values are averaged over [s]
 DEFAULT_WINDOW_S = 5.0
@@ -26,9 +26,6 @@ DEFAULT_WINDOW_S = 5.0
 DEFAULT_TRACK_MODEL = "rigid"
 #: the parameters of a flexible track when a scenario names no preset
 DEFAULT_TRACK_PRESET = "slab_track"
-#: default spectral radius of the multibody integrator (:class:`SolverSettings`): the car's own
-#: (vehicle.car.SPECTRAL_RADIUS; written here so that loading a scenario does not import exudyn)
-DEFAULT_SPECTRAL_RADIUS = 0.5
 
 
 @dataclass(frozen=True)
@@ -49,7 +46,7 @@ class SolverSettings:
     coupling: str = "linearised"
     output_interval_s: float = 0.02
     jobs: int = 2
-    spectral_radius: float = DEFAULT_SPECTRAL_RADIUS
+    spectral_radius: float = SPECTRAL_RADIUS
 
 
 @dataclass(frozen=True)

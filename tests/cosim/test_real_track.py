@@ -218,16 +218,10 @@ def test_flexible_track_carries_a_load_by_its_own_stiffness(guidance):
 
 
 # ---------------------------------------------------------------------------- runs
-import vehicle.car  # noqa: E402
 from cosim import cli  # noqa: E402
 from cosim.kinds.curve_entry import ramp_roll_rate_step_rad_per_s  # noqa: E402
 from cosim.load import load_scenario  # noqa: E402
 from cosim.runner import run  # noqa: E402
-from cosim.scenario.model import DEFAULT_SPECTRAL_RADIUS  # noqa: E402
-
-
-def test_one_default_spectral_radius():
-    assert DEFAULT_SPECTRAL_RADIUS == vehicle.car.SPECTRAL_RADIUS
 
 
 def canted_curve(guidance, cant, *extra):

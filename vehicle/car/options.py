@@ -11,18 +11,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..params import ContactParams, TrackStructure
+from ..params import SPECTRAL_RADIUS, ContactParams, TrackStructure
 from ..track import TrackGeometry
-
-#: default spectral radius of the implicit integrator (generalized-alpha) at infinite frequency.
-#: A linear cant ramp steps the rails' roll rate and rings each wheelset's ~240 Hz roll on its
-#: contacts (omega h ~ 7.5 at 5 ms): with 0.8 those impacts were integrated unstably on canted
-#: track (balanced and excess cant on the paper's curve diverged, kinematic and contact
-#: guidance); 0.5 damps them within a few steps and runs every case of the cant x speed x radius
-#: x transition matrix (benchmarks/track_matrix.py), while the converged results of the
-#: paper's scenarios move by less than their own discretisation error (docs/models.md,
-#: "Numerical damping").
-SPECTRAL_RADIUS = 0.5
 
 #: Newton's relative tolerance with contact guidance. A step's initial residual is ~M a
 #: there (~30 kN in the paper's curve) against ~700 kN with kinematic guidance, where the
