@@ -18,10 +18,10 @@ import statistics
 import time
 from pathlib import Path
 
+from cosim.engine.cases import build_cosimulation
+from cosim.engine.master import Record
 from cosim.kinds import ride
-from cosim.kinds.car import build_cosimulation
 from cosim.load import load_scenario
-from cosim.master import Record
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "ride_comfort.yaml"
 STAGES = ("_force_laws", "_advance_cars", "_advance_air", "sample")

@@ -24,9 +24,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from cosim.engine.cases import build_cosimulation  # noqa: E402
 from cosim.kinds import curve_entry as curve_mod  # noqa: E402
 from cosim.kinds import twist as twist_mod  # noqa: E402
-from cosim.kinds.car import build_cosimulation  # noqa: E402
 from cosim.load import load_scenario  # noqa: E402
 from cosim.verification.monolithic import run_monolithic  # noqa: E402
 

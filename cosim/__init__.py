@@ -10,9 +10,11 @@ import each other (each only from those above it; ``tests/test_architecture.py``
 * ``cosim/limits/``: judging results: the checks evaluated, EN 14363 criteria and the
   assessment of a run on track, comfort, the models' validity flags, the state limits that stop
   an impossible case;
-* :mod:`cosim.master`: the co-simulation master (the macro-step coupling of car and circuit);
-  ``cosim/results/``: the :class:`~cosim.results.outcome.Outcome` of a run, its labelled series,
-  the writer, plots, output folders, what ``compare`` reads;
+* ``cosim/stability/``: the car and its circuit as one linear system;
+* ``cosim/results/``: the :class:`~cosim.results.outcome.Outcome` of a run, its labelled series,
+  the writer, plots, the report, output folders, what ``compare`` reads;
+* ``cosim/engine/``: the co-simulation master (the macro-step coupling of car and circuit, the
+  sampled outputs) and a car scenario's cases run on a process pool;
 * ``cosim/kinds/``: the scenario kinds, each a :class:`~cosim.kinds.base.Kind` subclass (its
   experiment, its checking, its run, figures and metrics), and the registry of their instances
   (:data:`cosim.kinds.KINDS`; docs/architecture.md);

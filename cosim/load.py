@@ -17,8 +17,8 @@ import re
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
+from cosim.engine.master import COUPLINGS
 from cosim.errors import ScenarioError
-from cosim.master import COUPLINGS
 from cosim.scenario.checks import parse_checks
 from cosim.scenario.circuits import car_circuit, check_initial_state, parse_faults
 from cosim.scenario.model import (

@@ -1,163 +1,18 @@
-"""Running cars co-simulated with their circuit, one car per k value, k cases split over processes,
-gathered into one labelled Dataset (:mod:`cosim.results.series`)."""
+"""What the car kinds share besides running their cases (:mod:`cosim.engine.cases`): the wheel
+unloading of a run's Dataset, its per-case curves and bellow panels, the air accounts and the
+columns and figure of a fault."""
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional
 
 import numpy as np
 import xarray as xr
 
-from cosim.interrupts import install_in_worker
 from cosim.limits.criteria import static_wheel_loads, wheel_unloading
-from cosim.limits.watch import StateWatch
-from cosim.master import CoSimulation
-from cosim.results.io import Progress
 from cosim.results.plots import Curve, Figure, Panel, k_legend
-from cosim.results.series import car_dataset, concat_cases
 from cosim.scenario.model import Scenario
-from cosim.scenario.schema import k_label
-from pneumatics.integrate import stable_step_s
-from pneumatics.layouts import static_pressures
 from pneumatics.valves import DifferentialPressureValve
 from vehicle.params import BELLOWS
-
-#: make_car(scenario) -> a car with the vehicle.car.MetroCar interface (module-level: picklable)
-CarFactory = Callable[[Scenario], object]
-
-
-def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: CarFactory) -> CoSimulation:
-    """Cars (one per k) in static equilibrium and the circuit with bellow pressures that carry them.
-
-    The pneumatic step is the one of all the scenario's k values (and ``k_values``), not only of
-    those this circuit batches (:func:`pneumatics.integrate.stable_step_s` shortens it for a large
-    finite k, ~1e4 W/K and above at 5 ms, and a batched circuit takes one step for all its cases):
-    so a case's numbers do not depend on which cases share its circuit, i.e. on ``solver.jobs`` and
-    on how the runs are grouped onto processes."""
-    settings = scenario.solver
-    cars = [make_car(scenario) for _ in k_values]
-    components = scenario.circuit.components()
-    circuit = scenario.circuit.compile(np.asarray(k_values, dtype=float))
-    if tuple(circuit.bellow_names) != BELLOWS:
-        raise ValueError(f"the circuit's bellows must be {BELLOWS}, got {circuit.bellow_names}")
-    p0 = static_pressures(components, cars[0].static_bellow_forces_N(), circuit.atmosphere.p_Pa)
-    x0 = circuit.initial_state(p0, n_cases=len(k_values))
-    every_k = sorted(set(scenario.k_W_per_K) | set(k_values))
-    every = scenario.circuit.compile(np.asarray(every_k, dtype=float))
-    h_pneumatic = stable_step_s(every, every.initial_state(p0, n_cases=len(every_k)), settings.pneumatic_step_s)
-    watch = StateWatch(scenario.state_limits, len(k_values), cars[0].bellow_height_m)
-    return CoSimulation(cars, circuit, x0, settings.macro_step_s, h_pneumatic, settings.coupling,
-                        case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch)
-
-
-def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]:
-    scenario, k_values, make_car, duration_s, label = args
-    cosim = build_cosimulation(scenario, k_values, make_car)
-    progress = Progress(f"{label} k={','.join(k_label(k) for k in sorted(k_values))}") if label else None
-    record, diagnosis = cosim.run(duration_s, scenario.solver.output_interval_s, progress)
-    return record.arrays(), diagnosis, list(k_values)
-
-
-def _run_chunks(tasks) -> list:
-    """One worker's share: its chunks (see :func:`_worker_shares`), one after the other."""
-    return [_run_chunk(task) for task in tasks]
-
-
-def _chunks(k_values: Sequence[float], jobs: int) -> List[List[float]]:
-    jobs = max(1, min(jobs, len(k_values)))
-    return [list(k_values[i::jobs]) for i in range(jobs)]
-
-
-def _worker_shares(k_lists: Sequence[Sequence[float]], jobs: int) -> List[List[Tuple[int, List[float]]]]:
-    """The cases (variant, k) of every variant split over at most ``jobs`` workers with equal
-    numbers of cars (one more for the first ones), each share a list of (variant, k values)
-    chunks, a chunk being one co-simulation (one batched circuit).
-
-    The cases are laid out variant by variant, each variant's k values in the order of
-    :func:`_chunks` (k[0::n], k[1::n], ...), and cut into consecutive shares: a single variant
-    gets exactly the chunks of :func:`_chunks` (and so the same circuits, pneumatic steps and
-    results as before), several variants fill the workers one variant after the other (two
-    variants of 7 k on 2 workers: one variant per worker, all 7 k in one circuit)."""
-    cases = [(v, k) for v, ks in enumerate(k_lists) for chunk in _chunks(ks, jobs) for k in chunk]
-    workers = max(1, min(jobs, len(cases)))
-    sizes = [len(cases) // workers + (i < len(cases) % workers) for i in range(workers)]
-    shares, start = [], 0
-    for size in sizes:
-        share: List[Tuple[int, List[float]]] = []
-        for v, k in cases[start:start + size]:
-            if share and share[-1][0] == v:
-                share[-1][1].append(k)
-            else:
-                share.append((v, [k]))
-        shares.append(share)
-        start += size
-    return shares
-
-
-def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, durations_s: Sequence[float],
-                      labels: Optional[Sequence[Optional[str]]] = None) -> List[Tuple[List[Tuple[int, list]], List[str]]]:
-    """Run every k of every variant (e.g. the valve settings of one scenario), each for its
-    duration, on one pool of ``solver.jobs`` processes (the first variant's), the cases shared out
-    by :func:`_worker_shares`; returns, per variant, its chunks' record arrays with their k values,
-    and the divergence diagnoses. ``labels``: per variant, a progress label (None: silent)."""
-    labels = list(labels or [None] * len(variants))
-    shares = _worker_shares([v.k_W_per_K for v in variants], variants[0].solver.jobs)
-    tasks = [[(variants[v], ks, make_car, durations_s[v], labels[v]) for v, ks in share] for share in shares]
-    if len(tasks) == 1:
-        done = [_run_chunks(tasks[0])]
-    else:
-        with ProcessPoolExecutor(len(tasks), initializer=install_in_worker) as pool:
-            done = list(pool.map(_run_chunks, tasks))
-    per_variant: List[Tuple[list, List[str]]] = [([], []) for _ in variants]
-    for share, results in zip(shares, done):
-        for (v, _), (arrays, diagnosis, ks) in zip(share, results):
-            per_variant[v][0].append((ks, arrays))
-            if diagnosis:
-                per_variant[v][1].append(diagnosis)
-    return per_variant
-
-
-def simulate_cases(scenario: Scenario, settings: Sequence[Optional[bool]], make_car: CarFactory, duration_s: float,
-                   progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
-    """Every k of ``scenario`` for each valve setting (None: as ``circuit.valves`` says), all on
-    one pool of ``solver.jobs`` processes: one labelled Dataset (:func:`cosim.results.series.car_dataset`;
-    cases valve setting by valve setting, k ascending within each) and the divergence diagnoses
-    (prefixed with the valve setting when there are several)."""
-    return simulate_scenarios([scenario], settings, make_car, [duration_s], progress)[0]
-
-
-def simulate_scenarios(scenarios: Sequence[Scenario], settings: Sequence[Optional[bool]], make_car: CarFactory,
-                       durations_s: Sequence[float], progress: Optional[Progress] = None,
-                       names: Optional[Sequence[str]] = None) -> List[Tuple[xr.Dataset, List[str]]]:
-    """:func:`simulate_cases` for several scenarios at once (e.g. a ride's speeds, each on its own
-    track, each run for its own duration), all on one pool of ``solver.jobs`` processes (the first
-    scenario's): per scenario its Dataset and diagnoses. The cases are shared out scenario by
-    scenario (:func:`_worker_shares`), so that two scenarios of 4 k values on 2 processes run one
-    scenario per process, its 4 cars on one batched circuit: the circuit's cost per macro-step is
-    paid once for 4 cases instead of 2 (a case's numbers do not depend on the cases it shares a
-    circuit with: :func:`build_cosimulation`). ``names``: the progress labels of the
-    scenarios (default: their names)."""
-    named = any(s is not None for s in settings)
-    show = progress is not None and not progress.quiet
-    variants = [scenario if valves is None else scenario.with_valves(valves)
-                for scenario in scenarios for valves in settings]       # scenario by scenario
-    n = len(settings)
-    labels = [((names[i // n] if names else v.name) + (f" valves {'on' if v.circuit.valves else 'off'}" if named else ""))
-              if show else None for i, v in enumerate(variants)]
-    results = simulate_variants(variants, make_car, [durations_s[i // n] for i in range(len(variants))], labels)
-    out = []
-    for i in range(len(scenarios)):
-        datasets, diagnoses = [], []
-        for variant, (chunks, diag) in zip(variants[i * n:(i + 1) * n], results[i * n:(i + 1) * n]):
-            circuit = variant.circuit.compile()
-            valves = variant.circuit.valves
-            parts = [car_dataset(arrays, ks, valves, named, circuit.link_names, circuit.valve_names)
-                     for ks, arrays in chunks]
-            ds = concat_cases(parts)
-            datasets.append(ds.isel(case=np.argsort(ds["k_W_per_K"].values, kind="stable")))  # inf sorts last
-            diagnoses += [f"valves {'on' if valves else 'off'}: {d}" if named else d for d in diag]
-        out.append((concat_cases(datasets), diagnoses))
-    return out
 
 
 def add_wheel_unloading(ds: xr.Dataset, column: Optional[str] = None) -> None:

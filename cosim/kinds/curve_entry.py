@@ -15,18 +15,10 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import xarray as xr
 
+from cosim.engine.cases import simulate_scenarios
 from cosim.errors import ScenarioError
 from cosim.kinds.base import CarKind
-from cosim.kinds.car import (
-    add_wheel_unloading,
-    air_columns,
-    bellow_panels,
-    fault_columns,
-    fault_figure,
-    of_setting,
-    per_case,
-    simulate_scenarios,
-)
+from cosim.kinds.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case
 from cosim.limits import en14363
 from cosim.limits.assessment import STEP_M
 from cosim.limits.checks import CaseMetrics
@@ -369,7 +361,7 @@ def zones(curve: CurveTest) -> Tuple[str, ...]:
 
 
 def make_car(scenario: Scenario):
-    """The car running along the curve-entry track (picklable factory for cosim.kinds.car), with
+    """The car running along the curve-entry track (picklable factory for cosim.engine.cases), with
     the curve's guidance, contact parameters and track irregularity (generated from its seed in
     each worker: the same track in every one)."""
     from vehicle.car import MetroCar  # exudyn: imported when a car is built, not to read a scenario
@@ -460,7 +452,7 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
 def simulate_many(scenarios: Sequence[Scenario], progress: Optional[Progress] = None,
                   names: Optional[Sequence[str]] = None) -> List[Tuple[xr.Dataset, List[str]]]:
     """:func:`simulate` for several curve entries at once (e.g. a ride's speeds), on one pool of
-    processes (:func:`cosim.kinds.car.simulate_scenarios`: a scenario's k values share a process
+    processes (:func:`cosim.engine.cases.simulate_scenarios`: a scenario's k values share a process
     and a circuit where the processes allow). All must have the same valve settings."""
     settings = scenarios[0].curve.valve_settings
     if any(s.curve.valve_settings != settings for s in scenarios):

@@ -229,7 +229,7 @@ def make_car(scenario: Scenario, speed_m_per_s: Optional[float] = None, contact:
 
 
 def disturbed_car(scenario: Scenario):
-    """The car of a brute-force run (picklable factory for :mod:`cosim.kinds.car`): running at the
+    """The car of a brute-force run (picklable factory for :mod:`cosim.engine.cases`): running at the
     scenario's first nonlinear speed, every wheelset released at its first disturbance."""
     from vehicle.car import MetroCar
     test = scenario.stability
@@ -241,7 +241,7 @@ def disturbed_car(scenario: Scenario):
 
 
 def ramping_car(scenario: Scenario):
-    """The car of a ramp-down (picklable factory for :mod:`cosim.kinds.car`): released at the ramp's
+    """The car of a ramp-down (picklable factory for :mod:`cosim.engine.cases`): released at the ramp's
     disturbance, held at its start speed, then slowing at the first of its decelerations."""
     from vehicle.car import MetroCar
     test = scenario.stability
@@ -407,7 +407,7 @@ def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str,
     """Every brute-force run (speed x disturbance x k x valve setting, co-simulated): per run the
     leading wheelset's growth rate and final amplitude (:mod:`cosim.stability.nonlinear`), and the
     diagnoses of runs that stopped (a derailed car: it grew)."""
-    from cosim.kinds.car import simulate_scenarios
+    from cosim.engine.cases import simulate_scenarios
     from cosim.stability.nonlinear import final_amplitude_m, growth_rate_per_s, hunts
     test = scenario.stability
     out, diagnoses = [], []
@@ -442,7 +442,7 @@ def _ramp_down(scenario: Scenario, progress: Progress):
     amplitude at the start speed and the speed at which it died
     (:func:`cosim.stability.nonlinear.limit_cycle_end`); rows of the envelope against speed (the
     figure's trace); the diagnoses."""
-    from cosim.kinds.car import simulate_scenarios
+    from cosim.engine.cases import simulate_scenarios
     from cosim.stability.nonlinear import envelope, limit_cycle_end
     from vehicle.speed import SpeedProfile
     test = scenario.stability

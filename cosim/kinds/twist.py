@@ -12,18 +12,10 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import xarray as xr
 
+from cosim.engine.cases import simulate_cases
 from cosim.errors import ScenarioError
 from cosim.kinds.base import CarKind
-from cosim.kinds.car import (
-    add_wheel_unloading,
-    air_columns,
-    bellow_panels,
-    fault_columns,
-    fault_figure,
-    of_setting,
-    per_case,
-    simulate_cases,
-)
+from cosim.kinds.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import DQQ_LIMIT, en14363_twist_limit, static_wheel_loads, wheel_unloading, window_drift, window_mean
 from cosim.results.io import Progress
@@ -186,7 +178,7 @@ def valve_settings(test: TwistTest, valves: bool) -> Tuple[bool, ...]:
 
 
 def make_car(scenario: Scenario):
-    """The car standing on rails that follow the twist (picklable factory for cosim.kinds.car)."""
+    """The car standing on rails that follow the twist (picklable factory for cosim.engine.cases)."""
     from vehicle.car import MetroCar  # exudyn: imported when a car is built, not to read a scenario
     return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=scenario.solver.mechanics_step_s,
                     spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track)

@@ -14,7 +14,6 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 import xarray as xr
 
-from cosim.master import OUTPUTS
 from cosim.scenario.schema import k_label
 from vehicle.params import BELLOWS, FLOOR_POINTS, WHEELS, WHEELSETS
 
@@ -25,15 +24,16 @@ def case_name(k: float, valves: Optional[bool]) -> str:
     return (f"valves={'on' if valves else 'off'}_" if valves is not None else "") + f"k={k_label(k)}"
 
 
-def car_dataset(arrays: Dict[str, np.ndarray], ks: Sequence[float], valves: bool, named: bool = True,
-                links: Sequence[str] = (), valve_names: Sequence[str] = ()) -> xr.Dataset:
-    """A car record (:meth:`cosim.master.Record.arrays`: arrays (samples, ..., cases)) as a
-    Dataset. ``valves``: the valve setting of every case; ``named``: the case names carry it
-    (a scenario with several settings)."""
+def car_dataset(arrays: Dict[str, np.ndarray], outputs: Sequence, ks: Sequence[float], valves: bool,
+                named: bool = True, links: Sequence[str] = (), valve_names: Sequence[str] = ()) -> xr.Dataset:
+    """A car record (:meth:`cosim.engine.master.Record.arrays`: arrays (samples, ..., cases)) as a
+    Dataset; ``outputs``: what each array is (:data:`cosim.engine.master.OUTPUTS`: name, dims, unit,
+    long name, CSV column). ``valves``: the valve setting of every case; ``named``: the case names
+    carry it (a scenario with several settings)."""
     labels = {"wheel": list(WHEELS), "wheelset": list(WHEELSETS), "bellow": list(BELLOWS), "link": list(links),
               "valve": list(valve_names), "floor_point": list(FLOOR_POINTS)}
     data = {}
-    for o in OUTPUTS:                       # every sampled output, declared in cosim.master.OUTPUTS
+    for o in outputs:                       # every sampled output the engine declares
         if o.name not in arrays:
             continue
         attrs = {"units": o.unit, "long_name": o.long_name, **({"column": o.column} if o.column else {})}

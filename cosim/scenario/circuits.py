@@ -163,7 +163,7 @@ def circuit_error(exc: CircuitError, file, prefix, yaml_key_of) -> ScenarioError
 
 
 def check_initial_state(circuit: CarCircuit, car, ks, valve_settings, path) -> None:
-    """Start the circuit once as the runners will (cars/runs: cosim.kinds.car.build_cosimulation):
+    """Start the circuit once as the runners will (cars/runs: cosim.engine.cases.build_cosimulation):
     bellow pressures that carry the car's static load, tanks at their bellow's, every k value; an
     initial state that cannot be set (a chamber with no initial pressure, an isothermal chamber
     not at the atmosphere's temperature) fails here, not in a worker process."""

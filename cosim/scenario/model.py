@@ -30,7 +30,7 @@ DEFAULT_TRACK_PRESET = "slab_track"
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """Co-simulation settings (see cosim/master.py for the scheme). ``spectral_radius``: the
+    """Co-simulation settings (see cosim/engine/master.py for the scheme). ``spectral_radius``: the
     multibody integrator's (generalized-alpha) spectral radius at infinite frequency, rho in
     [0, 1]: how much it damps what its step cannot resolve (1: nothing; 0: the most; the
     integrator stays second order for every rho). The wheelsets' modes on their contacts lie at

@@ -2,7 +2,7 @@
 together, inside exudyn, by one integrator with one step.
 
 Model. The car is the co-simulation's own (its kind's ``make_car``, e.g. ``cosim.kinds.twist.make_car``,
-built, with the circuit and its initial state, by :func:`cosim.kinds.car.build_cosimulation`), with
+built, with the circuit and its initial state, by :func:`cosim.engine.cases.build_cosimulation`), with
 two changes:
 
 * the pneumatic state x of one case (one k) becomes exudyn first-order coordinates: a
@@ -77,8 +77,8 @@ import exudyn as exu
 import numpy as np
 from exudyn.itemInterface import NodeGenericODE1, ObjectGenericODE1
 
-from cosim.kinds.car import build_cosimulation
-from cosim.master import Record
+from cosim.engine.cases import build_cosimulation
+from cosim.engine.master import Record
 from cosim.scenario.model import Scenario
 
 _OUT = exu.OutputVariableType
@@ -115,7 +115,7 @@ def state_scale(circuit) -> np.ndarray:
 
 
 class MonolithicRecord(Record):
-    """The co-simulation's :class:`~cosim.master.Record` (one case), plus ``monolithic``: the
+    """The co-simulation's :class:`~cosim.engine.master.Record` (one case), plus ``monolithic``: the
     :class:`MonolithicCar` that produced it (statistics, wall time)."""
 
     monolithic: Optional["MonolithicCar"] = None

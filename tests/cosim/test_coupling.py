@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from cosim.cli import main
-from cosim.kinds.car import build_cosimulation
+from cosim.engine.cases import build_cosimulation
 from cosim.kinds.twist import make_car as twist_car
 from cosim.load import load_scenario
 from cosim.runner import run

@@ -101,7 +101,7 @@ class BrakingKind(CarKind):
         return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, track_structure=scenario.track)
 
     def run(self, scenario, progress):
-        from cosim.kinds.car import simulate_cases
+        from cosim.engine.cases import simulate_cases
         from cosim.limits.checks import CaseMetrics
         ds, diagnoses = simulate_cases(scenario, scenario.braking.valve_settings, self.make_car,
                                        scenario.braking.duration_s, progress)

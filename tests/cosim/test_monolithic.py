@@ -17,9 +17,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from cosim.engine.cases import build_cosimulation
 from cosim.kinds import curve_entry as curve
 from cosim.kinds import twist
-from cosim.kinds.car import build_cosimulation
 from cosim.load import load_scenario
 from cosim.verification.monolithic import MonolithicCar, run_monolithic
 from vehicle.car import WHEELS

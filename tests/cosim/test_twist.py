@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from cosim import cli
-from cosim.kinds.car import build_cosimulation
+from cosim.engine.cases import build_cosimulation
 from cosim.kinds.twist import make_car, rail_heights, simulate, wheelset_x_m
 from cosim.limits.criteria import static_wheel_loads, wheel_unloading, window_mean
 from cosim.load import load_scenario
@@ -186,7 +186,7 @@ class _StandingCar:
 
 
 def test_a_diverging_case_stops_alone_and_keeps_its_record(tmp_path):
-    from cosim.master import CoSimulation
+    from cosim.engine.master import CoSimulation
     from pneumatics.circuit import Circuit
     from pneumatics.layouts import static_pressures
     s = scenario(tmp_path)
@@ -221,7 +221,7 @@ class _PumpingCar(_StandingCar):
 
 
 def _pumping_run(tmp_path, reuse: bool):
-    from cosim.master import CoSimulation
+    from cosim.engine.master import CoSimulation
     from pneumatics.circuit import Circuit
     from pneumatics.layouts import static_pressures
     comps = scenario(tmp_path).circuit.components()
@@ -255,12 +255,12 @@ def _pumping_car(_scenario):
 
 
 def test_scenarios_run_together_give_what_each_gives_alone(tmp_path):
-    """cosim.kinds.car.simulate_scenarios (a ride's speeds on one pool, a scenario's k values on one
+    """cosim.engine.cases.simulate_scenarios (a ride's speeds on one pool, a scenario's k values on one
     circuit) gives each scenario the Dataset simulate_cases gives it alone, bit for bit, each run
     for its own duration, with both valve settings."""
     import dataclasses
 
-    from cosim.kinds.car import simulate_cases, simulate_scenarios
+    from cosim.engine.cases import simulate_cases, simulate_scenarios
     base = scenario(tmp_path)
     one = dataclasses.replace(base, solver=dataclasses.replace(base.solver, jobs=1), k_W_per_K=(0.0, 10.0))
     two = dataclasses.replace(one, k_W_per_K=(100.0, float("inf")))
@@ -282,7 +282,7 @@ def test_a_case_does_not_depend_on_the_cases_its_circuit_batches(tmp_path):
     runs onto processes do not move a number."""
     import dataclasses
 
-    from cosim.kinds.car import build_cosimulation
+    from cosim.engine.cases import build_cosimulation
     base = scenario(tmp_path)
     s = dataclasses.replace(base, k_W_per_K=(0.0, 1e5))
     alone = build_cosimulation(s, [0.0], _pumping_car)

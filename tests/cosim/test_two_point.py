@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hand_models import roll_hand_calculation
 
-from cosim.kinds.car import build_cosimulation
+from cosim.engine.cases import build_cosimulation
 from cosim.load import load_scenario
 from vehicle.car import MetroCar
 
