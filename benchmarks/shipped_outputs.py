@@ -22,6 +22,8 @@ import sys
 import time
 from pathlib import Path
 
+import yaml
+
 SCENARIOS = Path("scenarios")
 #: the words of check's closing line (cosim.limits.checks.VERDICT_LINE)
 VERDICT_WORDS = ("all limits hold", "LIMIT VIOLATED", "ERROR")
@@ -35,7 +37,7 @@ def run_all(out: Path, only: tuple, gates: bool = False) -> int:
         if only and not any(path.stem.startswith(o) for o in only):
             continue
         t0 = time.perf_counter()
-        gated = gates and "\nchecks:" in path.read_text()
+        gated = gates and bool((yaml.safe_load(path.read_text()) or {}).get("checks"))
         command = ["check", str(path), "--report"] if gated else ["run", str(path)]
         done = subprocess.run([sys.executable, "-m", "cosim.cli", *command, "--out", str(out.resolve() / path.stem),
                                "--overwrite", "--quiet"], capture_output=True, text=True)
