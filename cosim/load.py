@@ -165,6 +165,9 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
         valve_settings = (circuit.valves,)
         experiment = dataclasses.replace(experiment, valve_settings=valve_settings)
     _check_steps(solver, kind.duration_s(experiment), path)
+    refused = kind.refuse_faults(experiment) if data.get("faults") else None
+    if refused:
+        raise ScenarioError(path, ["faults"], refused)
     shortest = kind.shortest_duration_s(experiment)   # every case sees every fault
     circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit, shortest,
                                                                valve_settings))

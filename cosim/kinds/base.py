@@ -140,6 +140,10 @@ class CarKind(Kind):
         """The valve settings its cases run with (``valves``: ``circuit.valves``)."""
         return experiment.valve_settings
 
+    def refuse_faults(self, experiment: Any) -> Optional[str]:
+        """Why the experiment cannot honour ``faults:`` (None: it runs them)."""
+        return None
+
     @abstractmethod
     def make_car(self, scenario: "Scenario"):
         """The car of a run, with the :class:`vehicle.car.MetroCar` interface (a bound method of

@@ -170,6 +170,15 @@ def extra_files(test: StabilityTest) -> Tuple[Path, ...]:
     return (Path(test.wheel_profile),) if test.wheel_profile else ()
 
 
+def refuse_faults(test: StabilityTest) -> Optional[str]:
+    """A stability analysis linearises the intact car and circuit about steady running: a fault
+    (an event in time) has no place in it, and a brute force or ramp-down with one would be judged
+    against the intact car's linear critical speed. Refused rather than ignored (it had been run
+    as the intact car, its rows labelled with the fault)."""
+    return ("a stability analysis linearises the intact car and circuit about steady running and does not "
+            "honour faults; run the faulted car on track (kind curve_entry or ride) instead")
+
+
 def refuse_check(metric: str, test: StabilityTest) -> Optional[str]:
     if metric == "nonlinear_critical_speed_m_per_s" and not test.nonlinear_speeds_m_per_s \
             and test.ramp_from_m_per_s is None:
@@ -670,6 +679,7 @@ class StabilityKind(CarKind):
     shortest_duration_s = staticmethod(shortest_duration_s)
     valve_settings = staticmethod(valve_settings)
     extra_files = staticmethod(extra_files)
+    refuse_faults = staticmethod(refuse_faults)
     refuse_check = staticmethod(refuse_check)
     refuse_limit = staticmethod(refuse_limit)
     make_car = staticmethod(make_car)

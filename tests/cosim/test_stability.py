@@ -449,3 +449,12 @@ def test_a_car_unstable_at_every_scanned_speed_fails_a_critical_speed_check(tmp_
     assert math.isnan(row["critical_speed_m_per_s"]) and "already at 90" in row["critical_note"]
     assert "hunting" in row["critical_mode"]
     assert not out.checks_hold()
+
+
+def test_faults_are_refused_not_ignored(tmp_path):
+    """A burst bellow in a stability scenario had run as the intact car (every mode the intact
+    car's, the rows labelled with the fault): refused at load, naming faults and why."""
+    data = yaml.safe_load((SCENARIOS / "stability.yaml").read_text())
+    data["faults"] = [{"kind": "burst", "component": "FR", "t_s": 0.0, "area_m2": 5e-4}]
+    with pytest.raises(ScenarioError, match=r"faults.*does not honour faults"):
+        load_scenario(write_scenario(tmp_path, data))
