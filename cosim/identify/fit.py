@@ -14,9 +14,12 @@ Standard errors come from the Jacobian J of the weighted residuals at the optimu
 k. Searched as log10 k over [:data:`THETA_LO`, :data:`THETA_HI`] (0.01 to 10^4 W/K), and at the
 exact limits k = 0 (adiabatic) and k = inf (isothermal), which the model computes exactly. An
 optimum at a limit is reported as that limit (not as a large finite number), with a one-sided
-interval. k alone is fitted on a batched grid (every k of a grid is one column of one circuit):
-a grid over the whole range, a finer one around the best point, a parabola through the lowest
-three, the interval ends refined where the profile crosses the threshold.
+interval. k alone is fitted on batched grids (every k of a grid is one column of one circuit): a
+grid over the whole range, then a bracketed minimisation (:func:`_minimise`: batches spread inside
+the bracket of the lowest point) to within 0.01 standard errors, the noise re-estimated at the
+minimum and the minimum refined for it until both settle. The estimate is the least S of all the
+points evaluated, so the profile reported (every point, S - S_min) is >= 0 and the interval,
+where it crosses the threshold each side, holds the estimate.
 
 Other keys (``circuit.pipe.zeta`` ...) are searched in log10 within a factor 100 of the
 scenario's value (and the key's valid range), jointly with k by scipy.optimize.least_squares;
@@ -138,10 +141,58 @@ class _KGrid:
             case = {c: v[i] for c, v in pred.items()}
             self.pred[t], self.sse[t] = case, _sse(case, self.model.data)
 
+    def S(self, theta: float, sigma: Dict[str, float]) -> float:
+        """S at an evaluated theta for the noise ``sigma``."""
+        return sum(self.sse[theta][c] / sigma[c] ** 2 for c in sigma)
+
     def cost(self, sigma: Dict[str, float]) -> Tuple[np.ndarray, np.ndarray]:
         """(thetas sorted, S at each) for the noise ``sigma``."""
         ts = np.array(sorted(self.sse))
-        return ts, np.array([sum(self.sse[t][c] / sigma[c] ** 2 for c in sigma) for t in ts])
+        return ts, np.array([self.S(t, sigma) for t in ts])
+
+    def lowest(self, sigma: Dict[str, float]) -> float:
+        """The evaluated theta of least S for the noise ``sigma`` (the limits included)."""
+        ts, S = self.cost(sigma)
+        return float(ts[int(np.argmin(S))])
+
+
+#: k values a refinement batch spreads evenly over a bracket: a batch of 32 k costs what one k
+#: costs (one circuit, a column per k; the example's 60 s record: 6.0 s for 32 k, 6.2 s for one,
+#: the RK4 loop's Python overhead dominating), and narrows the bracket (32 + 1) / 2 = 16.5-fold
+BATCH = 32
+#: the minimum is refined until the evaluated points next to the lowest one are within this many
+#: standard errors of log10 k: the estimate is then within 0.01 se of the minimum, its S within
+#: 1e-4 of S_min (against the interval's 3.84)
+TOL_SE = 0.01
+#: ... or within this in log10 k (k to 2e-9, far below what any record resolves): the end where
+#: S'' is 0 at round-off, or where the minimum sits at the search range's edge
+THETA_FLOOR = 1e-9
+#: points each side of the vertex of the parabola through the lowest three, TOL_SE / 2 apart,
+#: added to a batch: where that vertex is within 0.04 se of the minimum (S near enough a parabola
+#: over the bracket), the batch brackets the minimum to TOL_SE (the even spread alone needs
+#: log(bracket / (TOL_SE se)) / log 16.5 batches)
+VERTEX_POINTS = 8
+#: bound on the batches of one refinement (from the coarse grid's bracket of 0.5 in log10 k, the
+#: even spread alone reaches THETA_FLOOR within 8)
+MAX_BATCHES = 9
+#: bound on the rounds of "minimum for the noise, noise from the minimum's residuals" (it settles
+#: in two or three: the noise moves the minimum by far less than a standard error)
+SIGMA_ROUNDS = 6
+#: half-width of the three-point stencil whose second difference is S'' at the estimate, the
+#: standard error's curvature (log10 k: 2.3 % of k); centred on the minimum, the odd (lopsided)
+#: part of S cancels in it
+CURVATURE_D = 0.01
+#: bound on the passes of "minimum, curvature, interval" (a second only where a point of the
+#: stencil or the interval undercuts the minimum: a second minimum close to it)
+SETTLE_PASSES = 3
+#: the interval's ends are interpolated linearly in a bracket narrower than this in log10 k (0.23 %
+#: of k) and than INTERVAL_REL of the quadratic half-width sqrt(2 chi2 / S''): a chord across a
+#: parabola puts the crossing inside it by (width / half-width)^2 / 8 of the half-width, <= 0.5 %
+INTERVAL_WIDTH = 1e-3
+INTERVAL_REL = 0.2
+#: first guesses at each end of the interval: this many points from 0.7 to 1.3 times the quadratic
+#: half-width (0.086 of it apart, inside INTERVAL_REL: a crossing among them needs no more batches)
+INTERVAL_GUESSES = 8
 
 
 def fit_k(model: RigModel, grid_points: int = 25) -> Identification:
@@ -151,117 +202,160 @@ def fit_k(model: RigModel, grid_points: int = 25) -> Identification:
     g = _KGrid(model)
     g.run([-math.inf, *np.linspace(THETA_LO, THETA_HI, grid_points), math.inf])
     sigma = {c: float(np.std(v)) or 1.0 for c, v in data.channels.items()}
-    for _ in range(2):                                        # noise from the best point's residuals
-        ts, S = g.cost(sigma)
-        sigma = _noise(g.sse[ts[int(np.argmin(S))]], data, 1)
-    ts, S = g.cost(sigma)
-    best = ts[int(np.argmin(S))]
-    spacing = (THETA_HI - THETA_LO) / (grid_points - 1)
-    if math.isfinite(best):
-        g.run(np.linspace(best - spacing, best + spacing, 9))
-        ts, S = g.cost(sigma)
-        finite = np.isfinite(ts)
-        i = int(np.argmin(np.where(finite, S, np.inf)))
-        if 0 < i < len(ts) - 1 and np.all(np.isfinite(ts[i - 1:i + 2])):
-            a, b, c = np.polyfit(ts[i - 1:i + 2], S[i - 1:i + 2], 2)
-            best = float(np.clip(-b / (2 * a), ts[i - 1], ts[i + 1])) if a > 0 else float(ts[i])
-        else:
-            best = float(ts[i])
-        best = _newton(g, sigma, best)
-        sigma = _noise(g.sse[best], data, 1)
-    ts, S = g.cost(sigma)
-    S_best = float(S[ts == best][0])
-    if math.isfinite(best) and (S_best > S[0] or S_best > S[-1]):
-        best = float(ts[int(np.argmin(S))])                   # a limit beats the finite optimum
-        S_best = float(S.min())
+    for _ in range(2):                                        # noise from the grid's best point
+        sigma = _noise(g.sse[g.lowest(sigma)], data, 1)
+    best, sigma = _consistent_minimum(g, sigma, data)
+    for pass_ in range(SETTLE_PASSES):
+        curvature = _curvature(g, sigma, best)
+        lo, hi = _interval(g, sigma, best, g.S(best, sigma), curvature)
+        if g.lowest(sigma) == best or pass_ == SETTLE_PASSES - 1:
+            break
+        best, sigma = _consistent_minimum(g, sigma, data)    # the stencil or the interval found lower S
+    S_best = g.S(best, sigma)
     limit = "0" if best == -math.inf else "inf" if best == math.inf else ""
-    se, curvature = math.nan, math.nan
-    if not limit:
-        d = NEWTON_D
-        S3 = [sum(g.sse[t][c] / sigma[c] ** 2 for c in sigma) for t in (best - d, best, best + d)]
-        curvature = (S3[0] - 2 * S3[1] + S3[2]) / d ** 2
-        se = k_of(best) * math.log(10) * math.sqrt(2.0 / curvature) if curvature > 0 else math.inf
-    lo, hi = _interval(g, sigma, best, S_best, curvature)
+    se = math.nan if limit else k_of(best) * math.log(10) * math.sqrt(2.0 / curvature) if curvature > 0 else math.inf
     est = Estimate(K_KEY, k_of(best), float(se), float(k_of(lo)), float(k_of(hi)), limit)
     ts, S = g.cost(sigma)
     profile = Profile(K_KEY, np.array([k_of(t) for t in ts]), S - S_best)
-    warnings = _warnings([est]) + _missing(g.pred[best])
+    warnings = _warnings([est]) + _missing(g.pred[best]) + _unsettled(profile)
     return Identification([est], np.ones((1, 1)), sigma, S_best, data.n, g.pred[best], [profile], warnings,
                           g.calls, time.perf_counter() - t0)
 
 
-#: half-width of the three-point stencil of the Newton steps on S(theta) (log10 k: 2.3 % of k)
-NEWTON_D = 0.01
+def _curvature(g: _KGrid, sigma, best: float) -> float:
+    """S'' at ``best`` from the stencil of CURVATURE_D each side (NaN at a limit)."""
+    if not math.isfinite(best):
+        return math.nan
+    stencil = (best - CURVATURE_D, best, best + CURVATURE_D)
+    g.run(stencil)
+    return _parabola(stencil, [g.S(t, sigma) for t in stencil])[0]
 
 
-def _newton(g: _KGrid, sigma, best: float, iterations: int = 5, tol_se: float = 0.1) -> float:
-    """Newton steps on S(theta) from ``best``, each from a three-point stencil (one batch): S is
-    not quadratic in theta over the coarse grid's spacing, its parabola only gets close. Stops,
-    without moving, once the next step would be below ``tol_se`` standard errors of theta
-    (sqrt(2 / S'')): the optimum is then known far better than the data know it."""
-    d = NEWTON_D
-    for _ in range(iterations):
-        g.run([best - d, best, best + d])
-        Sm, S0, Sp = (sum(g.sse[t][c] / sigma[c] ** 2 for c in sigma) for t in (best - d, best, best + d))
-        curvature = (Sp - 2 * S0 + Sm) / d ** 2
-        if curvature > 0:
-            step = -0.5 * (Sp - Sm) / d / curvature
-            if abs(step) < tol_se * math.sqrt(2.0 / curvature):
-                break
-        else:
-            step = d if Sp < Sm else -d
-        best = float(np.clip(best + float(np.clip(step, -4 * d, 4 * d)), THETA_LO, THETA_HI))
-    g.run([best - d, best, best + d])
-    return best
+def _unsettled(profile: Profile) -> List[str]:
+    """A warning where the profile still has points below the estimate's S (SETTLE_PASSES did
+    not settle: several minima close together)."""
+    below = profile.delta_S[profile.delta_S < 0]
+    return [f"the estimate is not the minimum of its profile: {below.size} point(s) down to S - S_min = "
+            f"{below.min():.3g} (several minima?); its interval is unreliable"] if below.size else []
+
+
+def _consistent_minimum(g: _KGrid, sigma, data, rounds: int = SIGMA_ROUNDS) -> Tuple[float, Dict[str, float]]:
+    """The minimum of S and the noise estimated from its residuals, each for the other (S weighs
+    the channels by 1 / sigma_c^2, so the noise moves the minimum): minimise for the noise, take
+    the noise from the minimum, until the minimum stays. Returns the evaluated theta of least S
+    for the returned noise: whatever the rounds, the estimate is the minimum of the cost reported
+    with it."""
+    best = None
+    for _ in range(rounds):
+        theta = _minimise(g, sigma)
+        if theta == best:
+            break
+        best, sigma = theta, _noise(g.sse[theta], data, 1)
+    return g.lowest(sigma), sigma
+
+
+def _minimise(g: _KGrid, sigma, batch: int = BATCH, tol_se: float = TOL_SE,
+              max_batches: int = MAX_BATCHES) -> float:
+    """The minimum of S(theta) for the noise ``sigma``, bracketed: the lowest evaluated point and
+    its evaluated neighbours bracket a minimum. Each batch spreads ``batch`` points evenly inside
+    the bracket, plus VERTEX_POINTS each side of the vertex of the parabola through the lowest
+    three (a guess: it only helps if it is right), until the neighbours are within ``tol_se``
+    standard errors (from the same parabola's curvature) of the lowest point. The estimate is an
+    evaluated point, the least of them: no model of S's shape is trusted for it (Newton steps
+    on a stencil wider than the standard error stop off the minimum where S is lopsided). A
+    lowest point at a limit (k = 0 or inf) is returned as it is."""
+    for _ in range(max_batches):
+        ts, S = g.cost(sigma)
+        i = int(np.argmin(S))
+        if not math.isfinite(ts[i]):
+            return float(ts[i])
+        a, c = _bracket(ts, i)
+        j = _around(ts, i)
+        curvature, vertex = _parabola(ts[j:j + 3], S[j:j + 3])
+        se = math.sqrt(2.0 / curvature) if curvature > 0 else math.inf
+        if max(ts[i] - a, c - ts[i]) <= max(tol_se * se, THETA_FLOOR):
+            break
+        guess = vertex + 0.5 * tol_se * se * np.arange(-VERTEX_POINTS, VERTEX_POINTS + 1) if se < math.inf else []
+        g.run([*np.linspace(a, c, batch + 2)[1:-1], *(t for t in guess if a < t < c)])
+    return g.lowest(sigma)
+
+
+def _bracket(ts: np.ndarray, i: int) -> Tuple[float, float]:
+    """The finite neighbours of ``ts[i]`` in the sorted ``ts`` (``ts[i]`` itself on a side without
+    one: the search range's edge)."""
+    a = ts[i - 1] if i > 0 and math.isfinite(ts[i - 1]) else ts[i]
+    c = ts[i + 1] if i + 1 < len(ts) and math.isfinite(ts[i + 1]) else ts[i]
+    return float(a), float(c)
+
+
+def _around(ts: np.ndarray, i: int) -> int:
+    """The first of the three finite points of the sorted ``ts`` centred on ``ts[i]`` (the three
+    nearest it at an edge)."""
+    finite = np.flatnonzero(np.isfinite(ts))
+    return int(np.clip(i - 1, finite[0], finite[-1] - 2))
+
+
+def _parabola(x: Sequence[float], y: Sequence[float]) -> Tuple[float, float]:
+    """(y'', vertex) of the parabola through three points, any spacing (NaN vertex if y'' = 0)."""
+    (x0, x1, x2), (y0, y1, y2) = x, y
+    f01, f12 = (y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1)
+    f012 = (f12 - f01) / (x2 - x0)
+    return 2.0 * f012, (0.5 * (x0 + x1) - f01 / (2.0 * f012) if f012 != 0 else math.nan)
 
 
 def _interval(g: _KGrid, sigma, best: float, S_best: float, curvature: float = math.nan,
-              width: float = 1e-3, rounds: int = 4) -> Tuple[float, float]:
-    """The 95 % interval in theta around ``best``: where S crosses S_best + chi2 on each side. A
-    first batch at 0.8, 1 and 1.25 times the quadratic prediction sqrt(2 chi2 / S'') each side,
-    then batches of four points inside each side's bracket until it is narrower than ``width``
-    (1e-3 in log10 k: 0.23 % of k), the crossing interpolated linearly in its last bracket. A side
-    that never crosses reaches its limit (-inf: k = 0, inf: k = inf); with the optimum at k = inf,
-    a crossing between it and the grid's top is reported at the top (a conservative, wider
-    interval: larger finite k need RK4 steps ~ 1/k)."""
+              rounds: int = 4) -> Tuple[float, float]:
+    """The 95 % interval in theta around the minimum ``best``: where S crosses S_best + chi2 on
+    each side, interpolated linearly in the bracket the evaluated points give (see INTERVAL_WIDTH
+    and INTERVAL_REL). A wider bracket gets a batch: the INTERVAL_GUESSES it holds, else BATCH / 2
+    points evenly inside. A side that never crosses reaches its limit (-inf: k = 0, inf: k = inf);
+    with the optimum at k = inf, a crossing between it and the grid's top is reported at the top
+    (a conservative, wider interval: larger finite k need RK4 steps ~ 1/k)."""
     threshold = S_best + CHI2_95
+    width, guesses = INTERVAL_WIDTH, np.array([])
     if math.isfinite(best) and curvature > 0:
         dq = math.sqrt(2.0 * CHI2_95 / curvature)
-        g.run([best + side * f * dq for side in (-1, 1) for f in (0.8, 1.0, 1.25)])
+        width, guesses = min(width, INTERVAL_REL * dq), np.linspace(0.7, 1.3, INTERVAL_GUESSES) * dq
     ends = {}
     for round_ in range(rounds + 1):
-        last = round_ == rounds                               # interpolate in whatever bracket there is
         ts, S = g.cost(sigma)
         todo = []
-        for side in (-1, 1):
-            if side in ends:
+        for side in (s for s in (-1, 1) if s not in ends):
+            end, (a, b, ya, yb) = _crossing(ts, S - threshold, best, side)
+            if end is None and (round_ == rounds or abs(b - a) < width or not np.isfinite(ya)):
+                end = float(a - ya * (b - a) / (yb - ya)) if np.isfinite(ya) else b
+            if end is not None:
+                ends[side] = end
                 continue
-            order = np.argsort(side * ts)
-            t_side, S_side = ts[order], S[order]
-            start = int(np.flatnonzero(t_side == best)[0])
-            above = [j for j in range(start + 1, len(t_side)) if S_side[j] >= threshold]
-            if not above:
-                ends[side] = side * math.inf
-                continue
-            j = above[0]
-            a, b = t_side[j - 1], t_side[j]
-            if math.isinf(b):
-                ends[side] = a
-                continue
-            if math.isinf(a) and a > 0:                       # from k = inf down to the grid's top: k
-                ends[side] = b                                # above 10^THETA_HI costs steps ~ k; the
-                continue                                      # interval is at least [10^THETA_HI, inf]
-            if math.isinf(a):                                 # from k = 0 up to the grid's bottom: cheap
-                a = b - 1.0
-            ya, yb = S_side[j - 1] - threshold, S_side[j] - threshold
-            if abs(b - a) < width or last or not np.isfinite(ya):
-                ends[side] = float(a - ya * (b - a) / (yb - ya)) if np.isfinite(ya) else float(b)
-            else:
-                todo += list(np.linspace(a, b, 6)[1:-1])
+            inside = [best + side * q for q in guesses if min(a, b) < best + side * q < max(a, b)]
+            todo += inside or list(np.linspace(a, b, BATCH // 2 + 2)[1:-1])
         if not todo:
             break
         g.run(todo)
     return ends.get(-1, -math.inf), ends.get(1, math.inf)
+
+
+def _crossing(ts, y, best, side) -> Tuple[Optional[float], Tuple[float, float, float, float]]:
+    """The first evaluated point where ``y`` (S - threshold) is >= 0 going from ``best`` towards
+    ``side``, and the one before it: (end, (a, b, y_a, y_b)), ``end`` the interval's end where
+    the points settle it (no crossing: the limit; a crossing next to k = inf: see
+    :func:`_interval`), else None and the crossing's bracket, the chord through (a, y_a) and (b,
+    y_b) its linear interpolation (next to k = 0, a is the grid's bottom - 1: cheap to refine)."""
+    order = np.argsort(side * ts)
+    t_side, y_side = ts[order], y[order]
+    start = int(np.flatnonzero(t_side == best)[0])
+    above = [j for j in range(start + 1, len(t_side)) if y_side[j] >= 0]
+    if not above:
+        return side * math.inf, (math.nan,) * 4
+    a, b = float(t_side[above[0] - 1]), float(t_side[above[0]])
+    bracket = (a, b, float(y_side[above[0] - 1]), float(y_side[above[0]]))
+    if math.isinf(b):
+        return a, bracket
+    if math.isinf(a) and a > 0:     # from k = inf down to the grid's top: k above 10^THETA_HI costs
+        return b, bracket           # RK4 steps ~ 1/k; the interval is at least [10^THETA_HI, inf]
+    if math.isinf(a):               # from k = 0 up to the grid's bottom: cheap to refine
+        return None, (b - 1.0, *bracket[1:])
+    return None, bracket
 
 
 def _missing(pred: Dict[str, np.ndarray]) -> List[str]:
