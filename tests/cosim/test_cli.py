@@ -81,7 +81,7 @@ def test_a_run_outside_validity_is_flagged_and_fails_check(tmp_path, capsys):
     # the 15 Hz sine with k = 1 near the pipe resonance: a thermal runaway (paper §3)
     out = tmp_path / "out"
     code = cli.main(["run", str(SCENARIOS / "rig_sine_15hz.yaml"), "--k", "1", "--set", "test.duration_s=20",
-                     "--quiet", "--out", str(out)])
+                     "--out", str(out)])                 # not --quiet: it hides the printed warnings
     assert code == cli.EXIT_OK
     import csv
     row = next(csv.DictReader((out / "summary.csv").open()))
