@@ -1,5 +1,5 @@
 """Every fault kind a user can state, on the car in a curve, across k and the valve settings (not
-a test; tests/pneumatics/test_faults.py and tests/cosim/test_faults.py check the laws).
+a test; tests/pneumatics/test_faults.py and tests/cosim/kinds/test_car_faults.py check the laws).
 
     python benchmarks/fault_matrix.py                      # every fault, t = 8 s (in the arc)
     python benchmarks/fault_matrix.py --t 0                # every fault from the start

@@ -1,5 +1,5 @@
 """The car over the track users give it: cant x speed x radius x transition length, in both
-guidance modes, at the shipped steps (not a test; tests/cosim/test_real_track.py runs a corner of it).
+guidance modes, at the shipped steps (not a test; tests/cosim/kinds/test_real_track.py runs a corner of it).
 
     python benchmarks/track_matrix.py                       # the full matrix, both guidances
     python benchmarks/track_matrix.py --guidance contact --cant 0.1016 --speed 10 --radius 100 --transition 15

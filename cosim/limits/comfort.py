@@ -16,7 +16,7 @@ ISO 2631-4:2001, ISO 8041); every value below names the secondary source it was 
   reference manual implements from ISO 8041 Table 3 (pp. 3-14 to 3-16: its Table 3.1, "source:
   ISO 8041", and its filter code, upward step numerator [1/ω5², 1/(Q5 ω5), 1]·ω5²/ω6²,
   denominator [1/ω6², 1/(Q6 ω6), 1]), and the one the printed tables agree with (both typed into
-  tests/cosim/test_comfort.py with their transcriptions named): ISO 8041-1:2017 Annex B gives Wk
+  tests/cosim/limits/test_comfort.py with their transcriptions named): ISO 8041-1:2017 Annex B gives Wk
   0.4825 at 1 Hz and ISO 2631-1:1997 Table 3 0.482, where the step written
   (1 + s/(Q5 ω5) + s²/ω5²)/(1 + s/(Q6 ω6) + s²/ω6²) (this module before, equal to the form above
   times (f6/f5)²) gives twice that. Parameters (:data:`WEIGHTINGS`), all from ISO 8041 Table 3 as
