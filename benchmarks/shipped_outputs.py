@@ -24,9 +24,11 @@ from pathlib import Path
 
 import yaml
 
+from cosim.limits.checks import VERDICT_LINE
+
 SCENARIOS = Path("scenarios")
-#: the words of check's closing line (cosim.limits.checks.VERDICT_LINE)
-VERDICT_WORDS = ("all limits hold", "LIMIT VIOLATED", "ERROR")
+#: check's closing lines
+VERDICT_WORDS = tuple(VERDICT_LINE.values())
 
 
 def run_all(out: Path, only: tuple, gates: bool = False) -> int:

@@ -419,36 +419,36 @@ class _Rig(RigKind):
         return identify_circuit(scenario)
 
 
-class RampKind(_Rig):
+class _TimeSeriesRig(_Rig):
+    """A rig kind whose runs are time histories: ``compare`` overlays ``overlaid`` = (file
+    prefix, column, axis label) of several runs against time."""
+
+    overlaid: Tuple[str, str, str]
+
+    def compare(self, infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+        return compare_time_series(infos, out_dir, select, label, window, self.name, *self.overlaid)
+
+
+class RampKind(_TimeSeriesRig):
     """A slow crushing ramp, each configuration (bellow with and without tank) per k (Fig. 3)."""
 
     name, experiment, identify = "rig_ramp", RampTest, "time"
+    overlaid = ("ramp_", "F_bellow_N", "bellow force F [N]")
     stage = staticmethod(_ramp)
-
-    def figures(self, outcome: Outcome) -> List[Figure]:
-        return _ramp_figures(outcome)
+    figures = staticmethod(_ramp_figures)
 
     def identify_circuit(self, scenario: Scenario):
         """With the tank as the first configuration says."""
         return identify_circuit(scenario, scenario.test.configurations[0] == "bellow_tank")
 
-    def compare(self, infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
-        return compare_time_series(infos, out_dir, select, label, window, self.name, "ramp_", "F_bellow_N",
-                                   "bellow force F [N]")
 
-
-class SineKind(_Rig):
+class SineKind(_TimeSeriesRig):
     """A sine crushing at one frequency, per k (Fig. 5)."""
 
     name, experiment, identify = "rig_sine", SineTest, "time"
+    overlaid = ("sine_", "T_bellow_K", "bellow temperature T [K]")
     stage = staticmethod(_sine)
-
-    def figures(self, outcome: Outcome) -> List[Figure]:
-        return _sine_figures(outcome)
-
-    def compare(self, infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
-        return compare_time_series(infos, out_dir, select, label, window, self.name, "sine_", "T_bellow_K",
-                                   "bellow temperature T [K]")
+    figures = staticmethod(_sine_figures)
 
 
 class StiffnessKind(_Rig):
@@ -456,12 +456,8 @@ class StiffnessKind(_Rig):
 
     name, experiment, identify = "rig_stiffness", StiffnessTest, "table"
     stage = staticmethod(_stiffness)
-
-    def figures(self, outcome: Outcome) -> List[Figure]:
-        return _stiffness_figures(outcome)
-
-    def compare(self, infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
-        return compare_stiffness(infos, out_dir, select, label, window)
+    figures = staticmethod(_stiffness_figures)
+    compare = staticmethod(compare_stiffness)
 
 
 class Table2Kind(_Rig):
