@@ -6,6 +6,7 @@
 * :class:`ExecutorUnavailable`: the sweep executor asked for cannot be used here (Dask not
   installed, no scheduler at the address).
 
+Every one of them, and what the physics raises, has one base class, :class:`pneumorail.errors.PneumorailError`.
 What the physics raises stays with the physics: ``pneumatics.circuit.CircuitError`` (a circuit
 that cannot be assembled), ``pneumatics.circuit.CircuitDiverged``, ``vehicle.errors.Derailed``.
 """
@@ -14,8 +15,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence, Union
 
+from pneumorail.errors import PneumorailError
 
-class ScenarioError(ValueError):
+
+class ScenarioError(PneumorailError, ValueError):
     """Bad input: which file, which key path, what was expected."""
 
     def __init__(self, file: Union[str, Path, None], path: Sequence[str], message: str):
@@ -36,5 +39,5 @@ def _scenario_error(file: str, path: str, reason: str) -> "ScenarioError":
     return error
 
 
-class ExecutorUnavailable(RuntimeError):
+class ExecutorUnavailable(PneumorailError, RuntimeError):
     """The executor asked for cannot be used here (e.g. Dask is not installed)."""

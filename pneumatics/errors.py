@@ -5,8 +5,10 @@ from __future__ import annotations
 
 from typing import Mapping, Sequence
 
+from pneumorail.errors import PneumorailError
 
-class CircuitError(ValueError):
+
+class CircuitError(PneumorailError, ValueError):
     """A circuit description that cannot be assembled; ``path`` locates the offending field."""
 
     def __init__(self, path: Sequence[str], message: str):
@@ -18,7 +20,7 @@ class CircuitError(ValueError):
         return type(self), (self.path, self.reason)
 
 
-class CircuitDiverged(RuntimeError):
+class CircuitDiverged(PneumorailError, RuntimeError):
     """Integration produced a non-physical state; carries where and when, for a diagnosis."""
 
     def __init__(self, t_s: float, component: str, state: Mapping[str, float], reason: str):

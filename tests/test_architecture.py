@@ -115,6 +115,28 @@ def test_every_module_of_the_packages_is_in_git():
     # a clean clone has only what git tracks: an ignore rule that hides a new module (results/
     # once hid cosim/results/) breaks every fresh install while the working tree still imports
     tracked = set(subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split())
-    missing = [str(p.relative_to(ROOT)) for package in ("cosim", "pneumatics", "vehicle")
+    missing = [str(p.relative_to(ROOT)) for package in ("pneumorail", "cosim", "pneumatics", "vehicle")
                for p in (ROOT / package).rglob("*.py") if str(p.relative_to(ROOT)) not in tracked]
     assert not missing, f"not tracked by git: {missing}"
+
+
+def test_the_common_ground_imports_none_of_the_packages():
+    # pneumatics/ and vehicle/ import pneumorail/ (the base error); were it to import them back,
+    # the physics split would be broken through it
+    code = ("import sys, pneumorail, pneumorail.errors; "
+            "print([m for m in sys.modules if m.split('.')[0] in ('cosim', 'pneumatics', 'vehicle', 'exudyn')])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_every_deliberate_error_has_the_one_base_class():
+    from cosim.errors import ExecutorUnavailable, ScenarioError
+    from pneumatics.errors import CircuitDiverged, CircuitError
+    from pneumorail import PneumorailError
+    from vehicle.errors import Derailed
+    errors = (ScenarioError("s.yaml", ["a"], "bad"), ExecutorUnavailable("no dask"), CircuitError(["pipe"], "bad"),
+              CircuitDiverged(1.0, "bellow FL", {"p_Pa": -1.0}, "negative pressure"), Derailed("wheelset 1"))
+    assert all(isinstance(e, PneumorailError) for e in errors)
+    # the built-in classes they had still catch them (bad input: ValueError, the rest: RuntimeError)
+    assert [isinstance(e, ValueError) for e in errors] == [True, False, True, False, False]
+    assert not issubclass(ValueError, PneumorailError)     # a plain bug is not one of them
