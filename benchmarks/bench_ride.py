@@ -42,7 +42,7 @@ def timed(obj, name: str, totals: dict) -> None:
 
 def build(scenario, k_values):
     """The co-simulation of the ride ``scenario``'s first speed, one car per k value."""
-    curve, _ = ride.curve_at(scenario.ride, scenario.ride.speeds_m_per_s[0], scenario.vehicle)
+    curve, _ = ride.curve_at(scenario.experiment, scenario.experiment.speeds_m_per_s[0], scenario.vehicle)
     speed_scenario = ride._speed_scenario(scenario, curve)
     return build_cosimulation(speed_scenario, k_values, ride.curve_entry.make_car)
 

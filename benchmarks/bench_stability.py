@@ -47,7 +47,7 @@ def main() -> None:
         t0 = time.perf_counter()
         out = run(scenario)
         walls.append(time.perf_counter() - t0)
-        print(f"run {i + 1}: {walls[-1]:.2f} s ({len(scenario.stability.speeds_m_per_s)} speeds x "
+        print(f"run {i + 1}: {walls[-1]:.2f} s ({len(scenario.experiment.speeds_m_per_s)} speeds x "
               f"{len(scenario.k_W_per_K)} k x 2 airspring models; {spent['calls']} car linearisations "
               f"{spent['car']:.2f} s); critical speed {out.metrics['critical_speed_m_per_s']:.2f} m/s")
     print(f"median {statistics.median(walls):.2f} s over {args.repeat} runs (target: 30 s)")

@@ -40,13 +40,13 @@ def scenario(kind: str, k: float, duration: float | None):
     if kind == "twist":
         sc = load_scenario(SCENARIOS / "twist_dqq.yaml", ["solver.jobs=1"], [k])
         if duration:
-            hold = duration - sc.twist.ramp_s
+            hold = duration - sc.experiment.ramp_s
             sc = sc.with_experiment(hold_s=hold, window_s=min(hold, 5.0))
-        return sc, sc.twist.duration_s, twist_mod.make_car
+        return sc, sc.experiment.duration_s, twist_mod.make_car
     sc = load_scenario(SCENARIOS / "curve_entry.yaml", ["solver.jobs=1"], [k])
     if duration:
         sc = sc.with_experiment(duration_s=duration)
-    return sc.with_valves(True), sc.curve.duration_s, curve_mod.make_car
+    return sc.with_valves(True), sc.experiment.duration_s, curve_mod.make_car
 
 
 def headlines(kind, sc, rec):
@@ -75,7 +75,7 @@ def bench(kind: str, k: float, levels: int, duration: float | None) -> None:
         walls.append((h, time.perf_counter() - t0, rec.monolithic.stats))
         refs.append(headlines(kind, sc, rec.arrays()))
     title = (f"{kind}: {sc.name}, k = {k:g} W/K, {T:g} s"
-             + (", valves connected" if kind == "curve" else f", ramp {sc.twist.ramp_s:g} s"))
+             + (", valves connected" if kind == "curve" else f", ramp {sc.experiment.ramp_s:g} s"))
     print("=" * len(title))
     print(title)
     print("=" * len(title))

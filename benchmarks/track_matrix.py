@@ -80,7 +80,7 @@ def balance(outcome) -> float:
     t = ds["time"].values
     sum_y = ds["wheelset_lateral_force_N"].isel(case=0).sum("wheelset").values
     last = t >= t[-1] - 6.0
-    p, c = sc.vehicle, sc.curve
+    p, c = sc.vehicle, sc.experiment
     M = p.carbody_mass_kg + 2 * p.bogie_mass_kg + 4 * p.wheelset_mass_kg
     g = p.gravity_m_per_s2
     v2R = c.speed_m_per_s ** 2 / c.radius_m

@@ -1,10 +1,11 @@
-"""Run a scenario: its kind's ``run(scenario, progress) -> Outcome`` (compute only, nothing
-written), the validity flags on every summary row, then (:func:`run_scenario`) the kind's
+"""Run a scenario: its kind's ``run(scenario, progress) -> Computed`` (compute only, nothing
+written), the one :class:`Outcome` built from it (timing, totals, validity flags), then (:func:`run_scenario`) the kind's
 ``figures(outcome)`` and the files (:mod:`cosim.results.writer`). :func:`run` gives the in-memory
 result. A kind's module (:mod:`cosim.kinds`) holds the rest."""
 from __future__ import annotations
 
 import logging
+import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import List, Optional
@@ -19,22 +20,32 @@ from cosim.scenario.model import Scenario
 
 
 def run(scenario: Scenario, progress: Optional[Progress] = None) -> Outcome:
-    """Run ``scenario`` and return its :class:`Outcome` (nothing is written); every summary row
-    carries its validity flags (:mod:`cosim.limits.validity`). Every warning of the run is in
+    """Run ``scenario`` and return its :class:`Outcome` (nothing is written), built here once from
+    what its kind computed (:class:`~cosim.results.outcome.Computed`): the wall time, the totals
+    and checkable metrics of the cases (:meth:`~cosim.kinds.base.Kind.totals`,
+    :meth:`~cosim.kinds.base.Kind.case_metrics`), what failed on every row with faults, and every
+    row's validity flags (:mod:`cosim.limits.validity`). Every warning of the run is in
     ``outcome.warnings`` (run.json) and logged once: a kind that only kept one has it logged here."""
+    kind = KINDS[scenario.kind]
+    t0 = time.perf_counter()
     with _logged_warnings() as logged:
-        outcome = KINDS[scenario.kind].run(scenario, progress or Progress(scenario.name, quiet=True))
-    outcome.interrupted = stop_requested()
+        computed = kind.run(scenario, progress or Progress(scenario.name, quiet=True))
+    wall_s = time.perf_counter() - t0
     faults = _faults_label(scenario)
-    if faults:                                    # every row says what failed
-        outcome.rows = [{**row, "faults": faults} for row in outcome.rows]
-    flag_rows(outcome.rows)
-    for message in outcome.warnings:
+    rows = [{**row, "faults": faults} for row in computed.rows] if faults else list(computed.rows)  # what failed
+    cases = computed.cases
+    if cases is None:
+        cases = [c for c in map(kind.case_metrics, computed.rows) if c is not None]
+    flag_rows(rows)
+    warnings = list(computed.warnings)
+    for message in warnings:
         if message not in logged:
             LOG.warning(message)
-    for message in warnings_for(outcome.rows):
-        warn(outcome.warnings, message)
-    return outcome
+    for message in warnings_for(rows):
+        warn(warnings, message)
+    return Outcome(scenario=scenario, rows=rows, shown=computed.shown, series=computed.series,
+                   metrics=kind.totals(computed.rows), cases=cases, diagnoses=computed.diagnoses, warnings=warnings,
+                   info=computed.info, wall_s=wall_s, interrupted=stop_requested(), tables=computed.tables)
 
 
 class _Collect(logging.Handler):

@@ -9,7 +9,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import xarray as xr
 
-from cosim.engine.master import OUTPUTS, CoSimulation
+from cosim.engine.master import OUTPUTS, CoSimulation, Output
 from cosim.interrupts import install_in_worker
 from cosim.limits.watch import StateWatch
 from cosim.results.io import Progress
@@ -24,14 +24,16 @@ from vehicle.params import BELLOWS
 CarFactory = Callable[[Scenario], object]
 
 
-def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: CarFactory) -> CoSimulation:
+def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: CarFactory,
+                       extra_outputs: Sequence[Output] = ()) -> CoSimulation:
     """Cars (one per k) in static equilibrium and the circuit with bellow pressures that carry them.
 
     The pneumatic step is the one of all the scenario's k values (and ``k_values``), not only of
     those this circuit batches (:func:`pneumatics.integrate.stable_step_s` shortens it for a large
     finite k, ~1e4 W/K and above at 5 ms, and a batched circuit takes one step for all its cases):
     so a case's numbers do not depend on which cases share its circuit, i.e. on ``solver.jobs`` and
-    on how the runs are grouped onto processes."""
+    on how the runs are grouped onto processes. ``extra_outputs``: what the kind samples besides
+    :data:`~cosim.engine.master.OUTPUTS`."""
     settings = scenario.solver
     cars = [make_car(scenario) for _ in k_values]
     components = scenario.circuit.components()
@@ -45,12 +47,12 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
     h_pneumatic = stable_step_s(every, every.initial_state(p0, n_cases=len(every_k)), settings.pneumatic_step_s)
     watch = StateWatch(scenario.state_limits, len(k_values), cars[0].bellow_height_m)
     return CoSimulation(cars, circuit, x0, settings.macro_step_s, h_pneumatic, settings.coupling,
-                        case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch)
+                        case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch, extra_outputs=extra_outputs)
 
 
 def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]:
-    scenario, k_values, make_car, duration_s, label = args
-    cosim = build_cosimulation(scenario, k_values, make_car)
+    scenario, k_values, make_car, duration_s, label, extra_outputs = args
+    cosim = build_cosimulation(scenario, k_values, make_car, extra_outputs)
     progress = Progress(f"{label} k={','.join(k_label(k) for k in sorted(k_values))}") if label else None
     record, diagnosis = cosim.run(duration_s, scenario.solver.output_interval_s, progress)
     return record.arrays(), diagnosis, list(k_values)
@@ -93,14 +95,17 @@ def _worker_shares(k_lists: Sequence[Sequence[float]], jobs: int) -> List[List[T
 
 
 def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, durations_s: Sequence[float],
-                      labels: Optional[Sequence[Optional[str]]] = None) -> List[Tuple[List[Tuple[int, list]], List[str]]]:
+                      labels: Optional[Sequence[Optional[str]]] = None,
+                      extra_outputs: Sequence[Output] = ()) -> List[Tuple[List[Tuple[int, list]], List[str]]]:
     """Run every k of every variant (e.g. the valve settings of one scenario), each for its
     duration, on one pool of ``solver.jobs`` processes (the first variant's), the cases shared out
     by :func:`_worker_shares`; returns, per variant, its chunks' record arrays with their k values,
-    and the divergence diagnoses. ``labels``: per variant, a progress label (None: silent)."""
+    and the divergence diagnoses. ``labels``: per variant, a progress label (None: silent);
+    ``extra_outputs``: sampled besides :data:`~cosim.engine.master.OUTPUTS`."""
     labels = list(labels or [None] * len(variants))
     shares = _worker_shares([v.k_W_per_K for v in variants], variants[0].solver.jobs)
-    tasks = [[(variants[v], ks, make_car, durations_s[v], labels[v]) for v, ks in share] for share in shares]
+    tasks = [[(variants[v], ks, make_car, durations_s[v], labels[v], tuple(extra_outputs)) for v, ks in share]
+             for share in shares]
     if len(tasks) == 1:
         done = [_run_chunks(tasks[0])]
     else:
@@ -116,17 +121,19 @@ def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, durati
 
 
 def simulate_cases(scenario: Scenario, settings: Sequence[Optional[bool]], make_car: CarFactory, duration_s: float,
-                   progress: Optional[Progress] = None) -> Tuple[xr.Dataset, List[str]]:
+                   progress: Optional[Progress] = None, extra_outputs: Sequence[Output] = ()) -> Tuple[xr.Dataset, List[str]]:
     """Every k of ``scenario`` for each valve setting (None: as ``circuit.valves`` says), all on
     one pool of ``solver.jobs`` processes: one labelled Dataset (:func:`cosim.results.series.car_dataset`;
     cases valve setting by valve setting, k ascending within each) and the divergence diagnoses
-    (prefixed with the valve setting when there are several)."""
-    return simulate_scenarios([scenario], settings, make_car, [duration_s], progress)[0]
+    (prefixed with the valve setting when there are several). ``extra_outputs``: what the kind
+    samples besides :data:`~cosim.engine.master.OUTPUTS` (:attr:`cosim.kinds.base.CarKind.outputs`)."""
+    return simulate_scenarios([scenario], settings, make_car, [duration_s], progress, extra_outputs=extra_outputs)[0]
 
 
 def simulate_scenarios(scenarios: Sequence[Scenario], settings: Sequence[Optional[bool]], make_car: CarFactory,
                        durations_s: Sequence[float], progress: Optional[Progress] = None,
-                       names: Optional[Sequence[str]] = None) -> List[Tuple[xr.Dataset, List[str]]]:
+                       names: Optional[Sequence[str]] = None,
+                       extra_outputs: Sequence[Output] = ()) -> List[Tuple[xr.Dataset, List[str]]]:
     """:func:`simulate_cases` for several scenarios at once (e.g. a ride's speeds, each on its own
     track, each run for its own duration), all on one pool of ``solver.jobs`` processes (the first
     scenario's): per scenario its Dataset and diagnoses. The cases are shared out scenario by
@@ -142,14 +149,15 @@ def simulate_scenarios(scenarios: Sequence[Scenario], settings: Sequence[Optiona
     n = len(settings)
     labels = [((names[i // n] if names else v.name) + (f" valves {'on' if v.circuit.valves else 'off'}" if named else ""))
               if show else None for i, v in enumerate(variants)]
-    results = simulate_variants(variants, make_car, [durations_s[i // n] for i in range(len(variants))], labels)
+    results = simulate_variants(variants, make_car, [durations_s[i // n] for i in range(len(variants))], labels,
+                                extra_outputs)
     out = []
     for i in range(len(scenarios)):
         datasets, diagnoses = [], []
         for variant, (chunks, diag) in zip(variants[i * n:(i + 1) * n], results[i * n:(i + 1) * n]):
             circuit = variant.circuit.compile()
             valves = variant.circuit.valves
-            parts = [car_dataset(arrays, OUTPUTS, ks, valves, named, circuit.link_names, circuit.valve_names)
+            parts = [car_dataset(arrays, (*OUTPUTS, *extra_outputs), ks, valves, named, circuit.link_names, circuit.valve_names)
                      for ks, arrays in chunks]
             ds = concat_cases(parts)
             datasets.append(ds.isel(case=np.argsort(ds["k_W_per_K"].values, kind="stable")))  # inf sorts last

@@ -134,7 +134,8 @@ def _air_from(node: str, sign: float = 1.0) -> Callable[[Sample], np.ndarray]:
     return read
 
 
-#: Every quantity a car run samples, in the order of the Dataset and the CSV columns.
+#: What every car run samples, in the order of the Dataset and the CSV columns; a kind that needs
+#: more declares its own (:attr:`cosim.kinds.base.CarKind.outputs`), sampled after these, in its runs only.
 OUTPUTS = (
     Output("wheel_load_N", ("wheel",), "N", "vertical wheel-rail force Q", "Q_{}_N", _per_car("wheel_loads_N", 8)),
     Output("crushing_m", ("bellow",), "m", "bellow crushing z (+ compression)", "z_{}_m", lambda s: s.sim.z),
@@ -186,12 +187,12 @@ OUTPUTS = (
 
 
 class Record:
-    """Sampled co-simulation output: ``t_s`` and, per :data:`OUTPUTS` entry sampled, a list of
-    arrays (..., cases)."""
+    """Sampled co-simulation output: ``t_s`` and, per output sampled (:data:`OUTPUTS` and a
+    kind's own), a list of arrays (..., cases)."""
 
-    def __init__(self):
+    def __init__(self, outputs: Sequence[Output] = OUTPUTS):
         self.t_s: List[float] = []
-        self.values: Dict[str, List[np.ndarray]] = {o.name: [] for o in OUTPUTS}
+        self.values: Dict[str, List[np.ndarray]] = {o.name: [] for o in outputs}
 
     def arrays(self) -> Dict[str, np.ndarray]:
         """Every sampled output as an array (samples, ..., cases), ``t_s`` first."""
@@ -211,14 +212,19 @@ class CoSimulation:
     it (:meth:`Circuit.with_active_faults`), within the macro-step, so the instant is exact
     whatever the steps; the force law of that step is the one of its start, anchored again to
     the faulted air at the next step (a one-step O(H) force error, O(H^2) in what it moves).
+
+    It samples :data:`OUTPUTS` and then ``extra_outputs`` (a kind's own, each ``read`` a
+    module-level function: the outputs travel to the worker processes).
     """
 
     def __init__(self, cars: Sequence, circuit: Circuit, x0: np.ndarray, macro_step_s: float,
                  pneumatic_step_s: float, coupling: str = "linearised", case_labels: Optional[Sequence[str]] = None,
-                 watch: Optional[StateWatch] = None):
+                 watch: Optional[StateWatch] = None, extra_outputs: Sequence[Output] = ()):
         if coupling not in COUPLINGS:
             raise ValueError(f"coupling must be one of {COUPLINGS}, got {coupling!r}")
         self.cars, self.circuit, self.x = list(cars), circuit, x0.copy()
+        #: what :meth:`sample` records
+        self.outputs: Tuple[Output, ...] = (*OUTPUTS, *extra_outputs)
         self.H, self.coupling = macro_step_s, coupling
         self.h_pneumatic = stable_step_s(circuit, x0, pneumatic_step_s)
         self.t = 0.0
@@ -373,7 +379,7 @@ class CoSimulation:
                 self._stop(j, f"impossible state: {reason}")
 
     def sample(self, record: Record) -> None:
-        """Append the current state's :data:`OUTPUTS` to ``record`` (NaN for a stopped case; the
+        """Append the current state's :attr:`outputs` to ``record`` (NaN for a stopped case; the
         contact outputs only when the cars run on the wheel-rail contact)."""
         c = self.circuit
         evaluated = c.evaluate(self.x, self.z)
@@ -382,7 +388,7 @@ class CoSimulation:
         stopped = ~self.active
         any_stopped = bool(stopped.any())
         record.t_s.append(self.t)
-        for output in OUTPUTS:
+        for output in self.outputs:
             if output.contact and not self.contact:
                 continue
             values = np.array(output.read(now), dtype=float)
@@ -396,7 +402,7 @@ class CoSimulation:
         if a case diverged, the diagnoses (that case's record holds NaN from then on; the run
         stops early only when every case has stopped). A SIGINT/SIGTERM (:mod:`cosim.interrupts`)
         stops it after the current macro-step, keeping the record so far, with a diagnosis."""
-        record = Record()
+        record = Record(self.outputs)
         every = max(1, round(output_interval_s / self.H))
         n = round(t_end_s / self.H)
         self.sample(record)

@@ -148,7 +148,7 @@ def plan(scenario_file: Path, k_W_per_K: float, noise: Dict[str, float], overrid
         able = ", ".join(k.name for k in KINDS.values() if k.identify == "time")
         raise ScenarioError(scenario_file, ["kind"], f"--plan works on a rig scenario identified from a time history "
                                                      f"({able}): a sine of its amplitude and duration at each frequency")
-    amplitude, duration = s.test.amplitude_m, s.test.duration_s
+    amplitude, duration = s.experiment.amplitude_m, s.experiment.duration_s
     d = 0.01                                                   # log10 k step of the sensitivity
     rows = []
     for f in frequencies:

@@ -22,7 +22,7 @@ def sine_record(scenario_file: Path, k_W_per_K: float, noise: Dict[str, float], 
     """The scenario's sine test (amplitude, frequency, duration) at ``k_W_per_K``: columns t_s, z_m
     and the noisy channels of ``noise``."""
     s = load_scenario(scenario_file)
-    test, rig = s.test, s.circuit
+    test, rig = s.experiment, s.circuit
     comps = rig.components()
     n = int(round(test.duration_s * samples_per_second)) + 1
     ts = run_time_series(comps, k_W_per_K, sine_motion(test.amplitude_m, test.frequency_Hz), test.duration_s, n,

@@ -13,18 +13,23 @@ scenario loaded; the circuit ``pneumorail identify`` drives).
 The application layer asks the registry's instances; nothing is found by name on a module::
 
     kind = KINDS[scenario.kind]
-    outcome = kind.run(scenario, progress)
+    computed = kind.run(scenario, progress)       # rows, series, tables, warnings
+    outcome = cosim.runner.run(scenario)          # the Outcome, built once from them
     figures = kind.figures(outcome)
 """
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar, List, Mapping, Optional, Tuple
+from typing import TYPE_CHECKING, Any, ClassVar, Dict, List, Mapping, Optional, Sequence, Tuple
+
+from cosim.limits.checks import CaseMetrics
+from cosim.results.outcome import largest
 
 if TYPE_CHECKING:                              # annotations only: the kinds import these rooms themselves
     from cosim.results.io import Progress
-    from cosim.results.outcome import Outcome
+    from cosim.results.outcome import Computed, Outcome
     from cosim.results.plots import Figure
     from cosim.scenario.model import Scenario
 
@@ -53,6 +58,9 @@ class Kind(ABC):
         :meth:`zones` lists the zones a scenario's track has.
     headline_metrics : tuple of str
         The summary columns ``verify`` estimates the discretisation error of.
+    total_metrics : tuple of str
+        The summary columns :meth:`totals` takes the largest of over the cases (None: the
+        headline metrics).
     plot_metrics : tuple of str
         The summary columns a sweep plots against its keys.
     k_fixed : str
@@ -74,14 +82,29 @@ class Kind(ABC):
     wheel_metrics: ClassVar[Tuple[str, ...]] = ()
     zone_metrics: ClassVar[Tuple[str, ...]] = ()
     headline_metrics: ClassVar[Tuple[str, ...]] = ()
+    total_metrics: ClassVar[Optional[Tuple[str, ...]]] = None
     plot_metrics: ClassVar[Tuple[str, ...]] = ()
     k_fixed: ClassVar[str] = ""
     case_columns: ClassVar[Tuple[str, ...]] = ("valves", "k_W_per_K")
     identify: ClassVar[str] = ""
 
     @abstractmethod
-    def run(self, scenario: "Scenario", progress: "Progress") -> "Outcome":
-        """Compute the scenario (nothing written): its :class:`~cosim.results.outcome.Outcome`."""
+    def run(self, scenario: "Scenario", progress: "Progress") -> "Computed":
+        """Compute the scenario (nothing written): its rows, series, tables and warnings
+        (:class:`~cosim.results.outcome.Computed`; the runner builds the Outcome)."""
+
+    def totals(self, rows: Sequence[Mapping[str, object]]) -> Dict[str, float]:
+        """The totals over the cases (``Outcome.metrics``): the largest of each of
+        :attr:`total_metrics` a row has (NaN if a case has none or NaN: it diverged)."""
+        names = self.headline_metrics if self.total_metrics is None else self.total_metrics
+        return {m: largest(r.get(m, math.nan) for r in rows) for m in names if any(m in r for r in rows)}
+
+    def case_metrics(self, row: Mapping[str, object]) -> Optional[CaseMetrics]:
+        """The checkable metrics of one summary row (None: the row is not a case ``checks:``
+        judge); default: each of :attr:`check_metrics`, NaN where the row has none."""
+        if not self.check_metrics:
+            return None
+        return CaseMetrics(row["k_W_per_K"], row["valves"], {m: row.get(m, math.nan) for m in self.check_metrics})
 
     def figures(self, outcome: "Outcome") -> List["Figure"]:
         """The figures of a run (default: none; its numbers are the summary)."""
@@ -123,6 +146,10 @@ class CarKind(Kind):
     ``vehicle``, ``track``, ``circuit``, ``solver``, ...)."""
 
     car = True
+    #: what its runs sample besides every car run's :data:`cosim.engine.master.OUTPUTS`
+    #: (:class:`cosim.engine.master.Output`, each ``read`` a module-level function): columns of its
+    #: own, that no other kind's files gain; pass them to :func:`cosim.engine.cases.simulate_cases`
+    outputs: ClassVar[Tuple[Any, ...]] = ()
 
     @abstractmethod
     def parse(self, data: Any, vehicle, path: Path) -> Any:

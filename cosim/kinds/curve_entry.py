@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
@@ -33,7 +32,7 @@ from cosim.limits.criteria import (
 )
 from cosim.limits.ride_comfort import comfort_columns
 from cosim.results.io import Progress, read_rows
-from cosim.results.outcome import Outcome, largest, warn
+from cosim.results.outcome import Computed, Outcome, largest, warn
 from cosim.results.overlay import Selection, case_series
 from cosim.results.plots import Curve, Figure, Panel, Span, save_panels
 from cosim.results.series import WHEELSETS, with_column
@@ -365,7 +364,7 @@ def make_car(scenario: Scenario):
     the curve's guidance, contact parameters and track irregularity (generated from its seed in
     each worker: the same track in every one)."""
     from vehicle.car import MetroCar  # exudyn: imported when a car is built, not to read a scenario
-    curve = scenario.curve
+    curve = scenario.experiment
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, track=curve.track(),
                     spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
                     speed_m_per_s=curve.speed_m_per_s, guidance=curve.guidance,
@@ -425,7 +424,7 @@ def car_centre_s_m(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
     start_s + v t, with MetroCar's default start, the rear wheelset at s = 0, i.e. the car centre
     at (bogie centre distance + wheelbase) / 2."""
     p = scenario.vehicle
-    return 0.5 * (p.bogie_centre_distance_m + p.wheelbase_m) + scenario.curve.speed_m_per_s * np.asarray(t_s, dtype=float)
+    return 0.5 * (p.bogie_centre_distance_m + p.wheelbase_m) + scenario.experiment.speed_m_per_s * np.asarray(t_s, dtype=float)
 
 
 def track_roll_rad(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
@@ -435,7 +434,7 @@ def track_roll_rad(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
     bogies do not), in the carbody roll's convention (right hand about the forward axis, positive =
     left side up). ``TrackGeometry.cant_rad(s)`` is signed like the curvature, positive raising the
     right rail (a left-hand curve's outer rail): the plane's roll is minus it."""
-    track = scenario.curve.track()
+    track = scenario.experiment.track()
     s = car_centre_s_m(scenario, t_s)
     cants = [np.asarray(track.cant_rad(np.clip(s + x, 0.0, track.total_length_m)), dtype=float)
              for x in scenario.vehicle.bogie_x_m]
@@ -454,17 +453,17 @@ def simulate_many(scenarios: Sequence[Scenario], progress: Optional[Progress] = 
     """:func:`simulate` for several curve entries at once (e.g. a ride's speeds), on one pool of
     processes (:func:`cosim.engine.cases.simulate_scenarios`: a scenario's k values share a process
     and a circuit where the processes allow). All must have the same valve settings."""
-    settings = scenarios[0].curve.valve_settings
-    if any(s.curve.valve_settings != settings for s in scenarios):
+    settings = scenarios[0].experiment.valve_settings
+    if any(s.experiment.valve_settings != settings for s in scenarios):
         raise ValueError("simulate_many: the scenarios' valve settings differ")
-    results = simulate_scenarios(scenarios, settings, make_car, [s.curve.duration_s for s in scenarios], progress, names)
+    results = simulate_scenarios(scenarios, settings, make_car, [s.experiment.duration_s for s in scenarios], progress, names)
     return [(_with_track_series(scenario, ds), diagnoses) for scenario, (ds, diagnoses) in zip(scenarios, results)]
 
 
 def _with_track_series(scenario: Scenario, ds: xr.Dataset) -> xr.Dataset:
     """The run's time series with the track plane's roll, the carbody roll relative to it, the
     wheel-rail series and the flows through the valves added."""
-    curve = scenario.curve
+    curve = scenario.experiment
     plane = track_roll_rad(scenario, ds["time"].values)
     ds["roll_track_plane_rad"] = with_column(xr.DataArray(plane, dims="time"), "roll_track_plane_rad", "rad",
                                              "roll of the track plane under the car (mean of the bogie centres)")
@@ -479,10 +478,9 @@ def _with_track_series(scenario: Scenario, ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def run(scenario: Scenario, progress: Progress) -> Outcome:
+def run(scenario: Scenario, progress: Progress) -> Computed:
     """The curve entry: every case, its summary row (:func:`summary_row`) and checkable metrics."""
-    t0 = time.perf_counter()
-    curve = scenario.curve
+    curve = scenario.experiment
     progress(f"curve entry at {curve.speed_m_per_s:g} m/s: {curve.straight_m:g} m straight, {curve.transition_m:g} m "
              f"transition, R = {curve.radius_m:g} m, {curve.guidance} guidance"
              f"{', irregular track' if curve.irregularity else ''}; {len(scenario.k_W_per_K)} k values x valves "
@@ -507,8 +505,6 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         cases.append(case_metrics(row, en14363.zone_metrics(found, stats)))
         statistics += en14363.statistics_rows(stats, row["valves"], row["k_W_per_K"])
         assessed += en14363.limit_rows(found, row["valves"], row["k_W_per_K"])
-    headline = [m for m in KIND.headline_metrics if rows and m in rows[0]]
-    metrics = {m: largest(r[m] for r in rows) for m in headline} if rows else {}
     shown = ("valves", "k_W_per_K", "roll_max_rad", "roll_mean_end_rad", "air_injected_kg", "air_exhausted_kg",
              "dqq_2m_p9985", "Q_2m_p9985_N")
     if curve.contact:
@@ -531,8 +527,8 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
                        f"contacts (~240 Hz on a rigid track), beyond the step, so sampled peaks there (dqq_raw_max, "
                        f"Y_raw_max_N) depend on the step; the 2 m means hold better. transition_shape: bloss or cosine has "
                        f"no step")
-    return Outcome(scenario, rows, shown, {"curve": ds}, metrics, cases, diagnoses, warnings, info,
-                   time.perf_counter() - t0, tables={"assessment": statistics, "assessment_limits": assessed})
+    return Computed(rows, shown, {"curve": ds}, {"assessment": statistics, "assessment_limits": assessed}, cases,
+                    diagnoses, warnings, info)
 
 
 #: grid of the arc length on which :func:`track_twist_warnings` looks for the largest twist [m]
@@ -694,7 +690,7 @@ def figures(outcome: Outcome) -> List[Figure]:
     if not outcome.rows:
         return []
     ds = outcome.series["curve"]
-    curve = outcome.scenario.curve
+    curve = outcome.scenario.experiment
     axis = track_axis(outcome.scenario, ds["time"].values)
     settings = curve.valve_settings
     roll = [Panel(per_case(of_setting(ds, v)["roll_rel_rad"], 1e3), "time t [s]",
@@ -753,7 +749,7 @@ class TrackAxis:
 
 def track_axis(scenario: Scenario, t_s: np.ndarray) -> TrackAxis:
     """The :class:`TrackAxis` of a curve run sampled at ``t_s``."""
-    curve = scenario.curve
+    curve = scenario.experiment
     return TrackAxis(car_centre_s_m(scenario, t_s), tuple(scenario.vehicle.wheelset_x_m), track_spans(curve.track()),
                      "R" if curve.direction > 0 else "L")
 
@@ -830,7 +826,7 @@ def record_headlines(scenario: Scenario, rec: Dict[str, np.ndarray], j: int = 0,
     and exhausted [kg]."""
     t = np.asarray(rec["t_s"])
     roll = rec["roll_rad"][:, j] - track_roll_rad(scenario, t)
-    w = window_s if window_s is not None else scenario.curve.window
+    w = window_s if window_s is not None else scenario.experiment.window
     return {"roll_max_rad": float(np.abs(roll).max()),
             "roll_mean_end_rad": float(window_mean(t, roll, min(w, t[-1] - t[0]))),
             "air_injected_kg": float(rec["air_from_supply_kg"][-1, j]),

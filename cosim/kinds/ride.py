@@ -12,7 +12,6 @@ once the whole car is in the arc as well) and lasts ``record_s``. The speeds run
 from __future__ import annotations
 
 import dataclasses
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Tuple
@@ -24,10 +23,9 @@ from cosim.kinds import curve_entry
 from cosim.kinds.base import CarKind
 from cosim.kinds.car import fault_columns
 from cosim.kinds.curve_entry import MAX_SPEED_M_PER_S, CurveTest, IrregularitySpec, parse_irregularity
-from cosim.limits.checks import CaseMetrics
 from cosim.limits.ride_comfort import COLUMNS, comfort_columns
 from cosim.results.io import Progress, read_rows
-from cosim.results.outcome import Outcome, largest, warn
+from cosim.results.outcome import Computed, Outcome, warn
 from cosim.results.overlay import Selection
 from cosim.results.plots import Curve, Figure, Panel, Span, k_legend, save_panels
 from cosim.scenario.model import Scenario
@@ -140,7 +138,7 @@ def extra_files(ride: RideTest) -> Tuple[Path, ...]:
 
 def make_car(scenario: Scenario):
     """The car of the first speed's run (:func:`run` builds each speed's through its curve)."""
-    ride = scenario.ride
+    ride = scenario.experiment
     return curve_entry.make_car(_speed_scenario(scenario, curve_at(ride, ride.speeds_m_per_s[0], scenario.vehicle)[0]))
 
 
@@ -149,15 +147,14 @@ def _speed_scenario(scenario: Scenario, curve: CurveTest) -> Scenario:
     return dataclasses.replace(scenario, kind="curve_entry", section="curve", experiment=curve)
 
 
-def run(scenario: Scenario, progress: Progress) -> Outcome:
+def run(scenario: Scenario, progress: Progress) -> Computed:
     """Every speed, k value and valve setting; per case its summary row with the comfort over the
     record."""
-    t0 = time.perf_counter()
-    ride = scenario.ride
+    ride = scenario.experiment
     progress(f"ride at {', '.join(f'{v:g}' for v in ride.speeds_m_per_s)} m/s, "
              f"{'straight track' if ride.radius_m is None else f'R = {ride.radius_m:g} m'}, {ride.record_s:g} s "
              f"records; {len(scenario.k_W_per_K)} k values x valves {ride.valve_settings}")
-    rows, series, diagnoses, cases = [], {}, [], []
+    rows, series, diagnoses = [], {}, []
     runs = [curve_at(ride, v, scenario.vehicle) for v in ride.speeds_m_per_s]
     warnings: List[str] = []
     for message in curve_entry.track_twist_warnings(runs[0][0].track(), scenario.vehicle):  # the same ramp at every speed
@@ -174,9 +171,6 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
             row.update(comfort_columns(case, start))
             row.update(fault_columns(scenario, case))
             rows.append(row)
-    metrics = {m: largest(r.get(m, np.nan) for r in rows) for m in KIND.headline_metrics} if rows else {}
-    for r in rows:
-        cases.append(CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, np.nan) for m in KIND.check_metrics}))
     shown = ("speed_m_per_s", "valves", "k_W_per_K", *(f"N_MV_{p}" for p in FLOOR_POINTS), "Wz_y_centre", "Wz_z_centre",
              "Cc_y_max_centre_m_per_s2", "Cc_z_max_centre_m_per_s2", "roll_max_rad", "air_injected_kg")
     info = {"record_s": ride.record_s, "speeds_m_per_s": list(ride.speeds_m_per_s),
@@ -184,7 +178,7 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     if ride.record_s < 300.0:
         warn(warnings, f"records of {ride.record_s:g} s: EN 12299 evaluates N_MV over 300 s; the percentiles rest on "
                        f"{int(ride.record_s // 5)} blocks")
-    return Outcome(scenario, rows, shown, series, metrics, cases, diagnoses, warnings, info, time.perf_counter() - t0)
+    return Computed(rows, shown, series, diagnoses=diagnoses, warnings=warnings, info=info)
 
 
 def figures(outcome: Outcome) -> List[Figure]:
@@ -237,7 +231,7 @@ def floor_figures(outcome: Outcome) -> List[Figure]:
     """The lateral and vertical (less g) floor accelerations at the car centre, a panel per speed
     and direction, against time and along the track (:func:`cosim.kinds.curve_entry.along_track`:
     each speed's own track, its segments and the comfort record marked)."""
-    ride, scenario = outcome.scenario.ride, outcome.scenario
+    ride, scenario = outcome.scenario.experiment, outcome.scenario
     multi = len(ride.valve_settings) > 1
     panels, positions, spans = [], [], []
     for v in ride.speeds_m_per_s:

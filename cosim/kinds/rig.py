@@ -16,7 +16,7 @@ import xarray as xr
 from cosim.errors import ScenarioError
 from cosim.kinds.base import RigKind
 from cosim.results.io import Progress, read_rows
-from cosim.results.outcome import Outcome
+from cosim.results.outcome import Computed, Outcome
 from cosim.results.overlay import Selection, case_series
 from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
 from cosim.scenario.circuits import chambers_and_pipe, compile_check, with_preset
@@ -175,13 +175,12 @@ def _rig_circuit(data: Mapping, file) -> RigCircuit:
     return rig
 
 
-def run(scenario: Scenario, progress: Progress, stage) -> Outcome:
+def run(scenario: Scenario, progress: Progress, stage) -> Computed:
     """A rig scenario: its summary rows and a time series per run from ``stage`` (a kind's
     ``(scenario, progress, diagnoses) -> (rows, series)``), and the diagnoses of early stops."""
-    t0 = time.perf_counter()
     diagnoses: List[str] = []
     rows, series = stage(scenario, progress, diagnoses)
-    return Outcome(scenario, rows, series=series, diagnoses=diagnoses, wall_s=time.perf_counter() - t0)
+    return Computed(rows, series=series, diagnoses=diagnoses)
 
 
 def _keep_diagnosis(ts, diagnoses: List[str], progress: Progress) -> None:
@@ -210,7 +209,7 @@ def rig_dataset(ts, **attrs) -> xr.Dataset:
 
 
 def _ramp(scenario: Scenario, progress: Progress, diagnoses: List[str]):
-    test: RampTest = scenario.test
+    test: RampTest = scenario.experiment
     rig = scenario.circuit
     rows, series = [], {}
     for config in test.configurations:
@@ -229,7 +228,7 @@ def _ramp(scenario: Scenario, progress: Progress, diagnoses: List[str]):
 
 
 def _ramp_figures(outcome: Outcome) -> List[Figure]:
-    test = outcome.scenario.test
+    test = outcome.scenario.experiment
     panels = []
     for config in test.configurations:
         runs = [ds for ds in outcome.series.values() if ds.attrs["configuration"] == config]
@@ -243,7 +242,7 @@ def _ramp_figures(outcome: Outcome) -> List[Figure]:
 
 
 def _sine(scenario: Scenario, progress: Progress, diagnoses: List[str]):
-    test: SineTest = scenario.test
+    test: SineTest = scenario.experiment
     rig = scenario.circuit
     comps = rig.components(with_tank=rig.tank is not None)
     period = 1.0 / test.frequency_Hz
@@ -278,7 +277,7 @@ def cycle_curve(t_s: np.ndarray, y: np.ndarray, samples_per_period: int, label: 
 
 
 def _sine_figures(outcome: Outcome) -> List[Figure]:
-    test = outcome.scenario.test
+    test = outcome.scenario.experiment
     runs = list(outcome.series.values())
 
     def curves(name, scale=1.0):
@@ -309,7 +308,7 @@ def _sine_summary(ts, test: SineTest) -> Dict[str, object]:
 
 
 def _stiffness(scenario: Scenario, progress: Progress, diagnoses: List[str]):
-    test = scenario.test
+    test = scenario.experiment
     rig = scenario.circuit
     comps = rig.components(with_tank=rig.tank is not None)
     t0 = time.perf_counter()
@@ -346,7 +345,7 @@ def _stiffness(scenario: Scenario, progress: Progress, diagnoses: List[str]):
 
 def _stiffness_figures(outcome: Outcome) -> List[Figure]:
     scenario, rows = outcome.scenario, outcome.rows
-    test, rig = scenario.test, scenario.circuit
+    test, rig = scenario.experiment, scenario.circuit
     curves = []
     for k in scenario.k_W_per_K:
         pts = [r for r in rows if r["k_W_per_K"] == k and r["stabilised"]]
@@ -372,7 +371,7 @@ def _spans_decades(curves) -> bool:
 
 
 def _table2(scenario: Scenario, progress: Progress, diagnoses: List[str]):
-    rig, test = scenario.circuit, scenario.test
+    rig, test = scenario.circuit, scenario.experiment
     progress("quasi-static stiffness (Table 2)")
     table = quasi_static_stiffness_table(rig.bellow, rig.tank, rig.pipe, rig.p0_Pa, AIR.gamma, test.amplitude_m, test.ramp_s)
     return [{"configuration": r.configuration, "regime": r.regime, "analytic_N_per_m": r.analytic_N_per_m,
@@ -412,7 +411,7 @@ class _Rig(RigKind):
     def load(self, data: Mapping, path: Path, common: Mapping) -> Scenario:
         return load(data, path, common, self.experiment)
 
-    def run(self, scenario: Scenario, progress: Progress) -> Outcome:
+    def run(self, scenario: Scenario, progress: Progress) -> Computed:
         return run(scenario, progress, self.stage)
 
     def identify_circuit(self, scenario: Scenario):
@@ -439,7 +438,7 @@ class RampKind(_TimeSeriesRig):
 
     def identify_circuit(self, scenario: Scenario):
         """With the tank as the first configuration says."""
-        return identify_circuit(scenario, scenario.test.configurations[0] == "bellow_tank")
+        return identify_circuit(scenario, scenario.experiment.configurations[0] == "bellow_tank")
 
 
 class SineKind(_TimeSeriesRig):

@@ -24,7 +24,6 @@ import hashlib
 import math
 import os
 import tempfile
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -35,7 +34,7 @@ from cosim.errors import ScenarioError
 from cosim.kinds.base import CarKind
 from cosim.limits.checks import CaseMetrics
 from cosim.results.io import Progress, atomic_write
-from cosim.results.outcome import Outcome, warn
+from cosim.results.outcome import Computed, Outcome, warn
 from cosim.results.plots import Curve, Figure, Panel, k_legend
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import Range, build, check_valve_settings, positive
@@ -230,7 +229,7 @@ def make_car(scenario: Scenario, speed_m_per_s: Optional[float] = None, contact:
     """The car running on straight, ideal track with wheel-rail contact at ``speed_m_per_s``
     (default: the first speed)."""
     from vehicle.car import MetroCar  # exudyn: imported when a car is built, not to read a scenario
-    test = scenario.stability
+    test = scenario.experiment
     v = test.speeds_m_per_s[0] if speed_m_per_s is None else speed_m_per_s
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, speed_m_per_s=float(v),
                     guidance="contact", contact=contact or contact_params(test, scenario.vehicle),
@@ -241,7 +240,7 @@ def disturbed_car(scenario: Scenario):
     """The car of a brute-force run (picklable factory for :mod:`cosim.engine.cases`): running at the
     scenario's first nonlinear speed, every wheelset released at its first disturbance."""
     from vehicle.car import MetroCar
-    test = scenario.stability
+    test = scenario.experiment
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
                     speed_m_per_s=test.nonlinear_speeds_m_per_s[0], guidance="contact",
                     contact=contact_params(test, scenario.vehicle), track_structure=scenario.track,
@@ -253,7 +252,7 @@ def ramping_car(scenario: Scenario):
     """The car of a ramp-down (picklable factory for :mod:`cosim.engine.cases`): released at the ramp's
     disturbance, held at its start speed, then slowing at the first of its decelerations."""
     from vehicle.car import MetroCar
-    test = scenario.stability
+    test = scenario.experiment
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
                     speed_m_per_s=test.ramp_from_m_per_s, guidance="contact",
                     contact=contact_params(test, scenario.vehicle), track_structure=scenario.track,
@@ -312,11 +311,10 @@ def _body_columns(modes) -> Dict[str, float]:
     return out
 
 
-def run(scenario: Scenario, progress: Progress) -> Outcome:
+def run(scenario: Scenario, progress: Progress) -> Computed:
     """The linear analysis (:func:`_linear_rows`), the time-domain ones the scenario asks for
     (:func:`_time_domain`), the verdict of each row (:func:`verdict_columns`)."""
-    t0 = time.perf_counter()
-    test = scenario.stability
+    test = scenario.experiment
     contact = contact_params(test, scenario.vehicle)
     speeds = sorted(set(test.speeds_m_per_s) | {test.reference_speed})
     progress(f"linear stability at {len(speeds)} speeds ({speeds[0]:g}-{speeds[-1]:g} m/s), "
@@ -327,17 +325,27 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     diagnoses, warnings = _time_domain(scenario, rows, tables, progress)
     for row in rows:
         row.update(verdict_columns(row, tables.get("nonlinear", ())))
-    circuit_rows = [r for r in rows if r["airspring"] == "circuit"]
-    cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {m: r.get(m, math.nan) for m in KIND.check_metrics})
-             for r in circuit_rows]
-    metrics = {m: float(np.min([r[m] for r in circuit_rows]))            # NaN when one case has none
-               for m in KIND.check_metrics if circuit_rows and m in circuit_rows[0]}
     info = {"contact_table": contact.table_csv or "S1002 / UIC60 1:40 (shipped)",
             "conicity_at_centre": _centre_conicity(probe),
             "equivalent_conicity_3mm": float(probe.contact_table.equivalent_conicity(0.003)),
             "speeds_m_per_s": speeds}
-    return Outcome(scenario, rows, _shown(test), {}, metrics, cases, diagnoses, warnings, info,
-                   time.perf_counter() - t0, tables=tables)
+    return Computed(rows, _shown(test), {}, tables, diagnoses=diagnoses, warnings=warnings, info=info)
+
+
+def totals(rows) -> Dict[str, float]:
+    """The lowest of each checkable metric over the circuit's cases (a critical speed is as low
+    as its worst case; NaN when one case has none)."""
+    circuit_rows = [r for r in rows if r["airspring"] == "circuit"]
+    return {m: float(np.min([r[m] for r in circuit_rows])) for m in KIND.check_metrics
+            if circuit_rows and m in circuit_rows[0]}
+
+
+def case_metrics(row) -> Optional[CaseMetrics]:
+    """The checkable metrics of a case of the circuit (the rows of the reference airspring
+    models are for comparison: checks do not judge them)."""
+    if row["airspring"] != "circuit":
+        return None
+    return CaseMetrics(row["k_W_per_K"], row["valves"], {m: row.get(m, math.nan) for m in KIND.check_metrics})
 
 
 def _linear_rows(scenario: Scenario, contact: ContactParams, F0, speeds: List[float], progress: Progress):
@@ -345,7 +353,7 @@ def _linear_rows(scenario: Scenario, contact: ContactParams, F0, speeds: List[fl
     ``max_frequency_Hz`` at every speed): the linear critical speed, the mode that loses its
     damping, the carbody modes at the reference speed."""
     from cosim.stability import critical_speed, scan_speeds
-    test = scenario.stability
+    test = scenario.experiment
     rows, mode_rows = [], []
     linearised: Dict[tuple, _Cars] = {}                # the car's linearisations by its bellows' stiffness:
                                                        # frozen air and static (isothermal for k > 0) repeat over k
@@ -382,7 +390,7 @@ def _time_domain(scenario: Scenario, rows: List[Dict[str, object]], tables: Dict
     """The brute force and the ramp-down the scenario asks for: their tables (into ``tables``),
     their results in the circuit rows; (diagnoses, warnings): without either, the warning that the
     critical speed is the linear one only."""
-    test = scenario.stability
+    test = scenario.experiment
     diagnoses: List[str] = []
     warnings: List[str] = []
     if test.nonlinear_speeds_m_per_s:
@@ -418,7 +426,7 @@ def _brute_force(scenario: Scenario, progress: Progress) -> Tuple[List[Dict[str,
     diagnoses of runs that stopped (a derailed car: it grew)."""
     from cosim.engine.cases import simulate_scenarios
     from cosim.stability.nonlinear import final_amplitude_m, growth_rate_per_s, hunts
-    test = scenario.stability
+    test = scenario.experiment
     out, diagnoses = [], []
     runs = [(v, d) for d in test.disturbances_m for v in test.nonlinear_speeds_m_per_s]
     progress(f"brute force at {', '.join(f'{v:g}' for v in test.nonlinear_speeds_m_per_s)} m/s, wheelsets released "
@@ -454,7 +462,7 @@ def _ramp_down(scenario: Scenario, progress: Progress):
     from cosim.engine.cases import simulate_scenarios
     from cosim.stability.nonlinear import envelope, limit_cycle_end
     from vehicle.speed import SpeedProfile
-    test = scenario.stability
+    test = scenario.experiment
     out, traces, diagnoses = [], [], []
     rates = test.ramp_decelerations_m_per_s2
     durations = [test.ramp_duration_s(a) for a in rates]
@@ -674,6 +682,8 @@ class StabilityKind(CarKind):
     plot_metrics = ("critical_speed_m_per_s", "min_damping_ratio")
     case_columns = ("airspring", "valves", "k_W_per_K")
 
+    totals = staticmethod(totals)
+    case_metrics = staticmethod(case_metrics)
     parse = staticmethod(parse)
     duration_s = staticmethod(duration_s)
     shortest_duration_s = staticmethod(shortest_duration_s)

@@ -4,7 +4,6 @@ the levelling valves isolated and/or connected. Kind ``twist``, section ``twist`
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -19,7 +18,7 @@ from cosim.kinds.car import add_wheel_unloading, air_columns, bellow_panels, fau
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import DQQ_LIMIT, en14363_twist_limit, static_wheel_loads, wheel_unloading, window_drift, window_mean
 from cosim.results.io import Progress
-from cosim.results.outcome import Outcome, largest, warn
+from cosim.results.outcome import Computed, Outcome, warn
 from cosim.results.overlay import Selection, case_series, worst_wheels
 from cosim.results.plots import Curve, Figure, Panel, Span, save_panels
 from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
@@ -180,13 +179,13 @@ def valve_settings(test: TwistTest, valves: bool) -> Tuple[bool, ...]:
 def make_car(scenario: Scenario):
     """The car standing on rails that follow the twist (picklable factory for cosim.engine.cases)."""
     from vehicle.car import MetroCar  # exudyn: imported when a car is built, not to read a scenario
-    return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.twist), step_s=scenario.solver.mechanics_step_s,
+    return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.experiment), step_s=scenario.solver.mechanics_step_s,
                     spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track)
 
 
 def run_settings(scenario: Scenario) -> Sequence[Optional[bool]]:
     """The runs: each of ``twist.valve_settings``, or one (None) as ``circuit.valves`` says."""
-    return scenario.twist.valve_settings or (None,)
+    return scenario.experiment.valve_settings or (None,)
 
 
 #: wheels every twist plot shows (paper Fig. 8); the worst wheels of the run are added
@@ -250,7 +249,7 @@ def simulate(scenario: Scenario, progress: Optional[Progress] = None) -> Tuple[x
     """Every case (k value x valve setting) of the twist scenario: the labelled time series (see
     :mod:`cosim.results.series`) with the wheel unloading ``dqq`` (ΔQ/Q0, time x wheel x case) added, and
     the divergence diagnoses."""
-    ds, diagnoses = simulate_cases(scenario, run_settings(scenario), make_car, scenario.twist.duration_s, progress)
+    ds, diagnoses = simulate_cases(scenario, run_settings(scenario), make_car, scenario.experiment.duration_s, progress)
     add_wheel_unloading(ds, column="dqq_{}")
     return ds, diagnoses
 
@@ -278,11 +277,10 @@ def twist_metrics(t_s: np.ndarray, dqq: np.ndarray, test: TwistTest, j: int) -> 
     return row
 
 
-def run(scenario: Scenario, progress: Progress) -> Outcome:
+def run(scenario: Scenario, progress: Progress) -> Computed:
     """The twist test: every case, its summary row (:func:`twist_metrics`, the end roll, the
     bellow temperature range) and checkable metrics."""
-    t0 = time.perf_counter()
-    test = scenario.twist
+    test = scenario.experiment
     settings = run_settings(scenario)
     bogie = (f" + bogie twist {test.bogie_twist * 1e3:g} permille over {test.bogie_base_m:g} m "
              f"({test.bogie_height_m * 1e3:.1f} mm across the front bogie)" if test.bogie_base_m is not None else "")
@@ -294,7 +292,6 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
     t = ds["time"].values
     dqq = ds["dqq"].transpose("time", "wheel", "case").values
     rows: List[Dict[str, object]] = []
-    cases: List[CaseMetrics] = []
     found: List[str] = []
     named = settings != (None,)
     for j, (k, valves) in enumerate(zip(ds["k_W_per_K"].values, ds["valves"].values)):
@@ -306,14 +303,10 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
         T = ds["bellow_T_K"].isel(case=j).values
         row["T_bellow_max_K"], row["T_bellow_min_K"] = float(T.max()), float(T.min())
         rows.append(row)
-        cases.append(CaseMetrics(k, valves, wheels={m: {w: row[f"{prefix}_{w}"] for w in WHEELS} for m, prefix in
-                                                    (("dqq_max", "dqq_max"), ("dqq_qs_max", "dqq_qs"),
-                                                     ("dqq_drift", "dqq_drift"))}))
         if not row["settled"]:
             where = f"valves {'on' if valves else 'off'}, " if named else ""
             warn(found, f"{where}k = {k_label(k)}: not settled, the {test.window:g} s mean of ΔQ/Q0 still moves by "
                         f"{row['dqq_drift']:.2g} from one window to the next (limit {test.settle_drift:g})")
-    metrics = {m: largest(r[m] for r in rows) for m in ("dqq_max", "dqq_qs_max", "dqq_drift")} if rows else {}
     info = {"twist_height_m": test.height_m, "twist_per_mille": test.twist * 1e3,
             "bogie_twist_height_m": test.bogie_height_m, "bogie_twist_per_mille": test.bogie_twist * 1e3,
             "rail_heights_m": {w: float(h) for w, h in zip(WHEELS, rail_heights(test)(test.duration_s))},
@@ -321,8 +314,14 @@ def run(scenario: Scenario, progress: Progress) -> Outcome:
             "Q0_N": {w: float(q) for w, q in zip(WHEELS, ds["Q0_N"].values[:, 0])} if ds.sizes["case"] else {}}
     shown = ("valves", "k_W_per_K", "dqq_max", "dqq_max_wheel", "t_dqq_max_s", "dqq_qs_max", "dqq_qs_max_wheel",
              "dqq_drift", "settled", "T_bellow_max_K")
-    return Outcome(scenario, rows, shown, {"twist": ds}, metrics, cases, diagnoses, found, info,
-                   time.perf_counter() - t0)
+    return Computed(rows, shown, {"twist": ds}, diagnoses=diagnoses, warnings=found, info=info)
+
+
+def case_metrics(row) -> CaseMetrics:
+    """A case's unloading per wheel: its largest dynamic, quasi-static and drift."""
+    return CaseMetrics(row["k_W_per_K"], row["valves"],
+                       wheels={m: {w: row[f"{prefix}_{w}"] for w in WHEELS} for m, prefix in
+                               (("dqq_max", "dqq_max"), ("dqq_qs_max", "dqq_qs"), ("dqq_drift", "dqq_drift"))})
 
 
 def _dqq_limit(scenario: Scenario) -> float:
@@ -345,7 +344,7 @@ def figures(outcome: Outcome) -> List[Figure]:
     """Per valve setting: the wheel loads (paper Fig. 8), ΔQ/Q0 with its limit, the bellows."""
     if not outcome.rows:
         return []
-    test, ds = outcome.scenario.twist, outcome.series["twist"]
+    test, ds = outcome.scenario.experiment, outcome.series["twist"]
     wheels = plot_wheels(outcome.rows)
     limit = _dqq_limit(outcome.scenario)
     extra = [w for w in wheels if w not in PLOT_WHEELS]
@@ -374,7 +373,7 @@ def track_figure(outcome: Outcome) -> Figure:
     """The car stands still, so along the track is along the car: the rail heights under each
     wheelset at the end of the ramp, and the quasi-static wheel unloading of each wheel at its
     wheelset's position on the car (a line per rail and case), the bogies marked."""
-    test, rows = outcome.scenario.twist, outcome.rows
+    test, rows = outcome.scenario.experiment, outcome.rows
     x = np.asarray(outcome.scenario.vehicle.wheelset_x_m)
     heights = rail_heights(test)(test.duration_s)
     sides = {"L": "left", "R": "right"}
@@ -435,8 +434,10 @@ class TwistKind(CarKind):
     wheel_metrics = ("dqq_max", "dqq_qs_max", "dqq_drift")
     # the dynamic and quasi-static unloading, largest and per wheel
     headline_metrics = ("dqq_max", "dqq_qs_max", *(f"dqq_max_{w}" for w in WHEELS), *(f"dqq_qs_{w}" for w in WHEELS))
+    total_metrics = ("dqq_max", "dqq_qs_max", "dqq_drift")
     plot_metrics = ("dqq_max", "dqq_qs_max")
 
+    case_metrics = staticmethod(case_metrics)
     parse = staticmethod(parse)
     duration_s = staticmethod(duration_s)
     valve_settings = staticmethod(valve_settings)

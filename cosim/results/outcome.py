@@ -18,8 +18,38 @@ LOG = logging.getLogger("pneumorail")
 
 
 @dataclass
+class Computed:
+    """What a kind's :meth:`~cosim.kinds.base.Kind.run` computed; the runner (:mod:`cosim.runner`)
+    alone builds the :class:`Outcome` from it (timing, totals, validity flags, faults column).
+
+    Attributes
+    ----------
+    rows : list of dict
+        The summary, one row per case (see :attr:`Outcome.rows`).
+    shown : tuple of str
+        The columns of :meth:`Outcome.report` (empty: every column).
+    series, tables, diagnoses, warnings, info
+        As in :class:`Outcome`; ``warnings`` are those the kind kept (logged as they arose).
+    cases : list of CaseMetrics, optional
+        The checkable metrics of each case, when they need more than its row (e.g. the EN 14363
+        statistics per zone); None: the runner takes them from the rows
+        (:meth:`~cosim.kinds.base.Kind.case_metrics`).
+    """
+
+    rows: List[Dict[str, object]]
+    shown: Tuple[str, ...] = ()
+    series: Dict[str, object] = field(default_factory=dict)
+    tables: Dict[str, List[Dict[str, object]]] = field(default_factory=dict)
+    cases: Optional[List[CaseMetrics]] = None
+    diagnoses: List[str] = field(default_factory=list)
+    warnings: List[str] = field(default_factory=list)
+    info: Dict[str, object] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, kw_only=True)
 class Outcome:
-    """The result of running one scenario.
+    """The result of running one scenario, built once by the runner (:func:`cosim.runner.run`)
+    from what the kind computed (:class:`Computed`); frozen, its fields given by name.
 
     Attributes
     ----------
@@ -27,7 +57,8 @@ class Outcome:
         What ran (validated, with overrides applied).
     rows : list of dict
         The summary: one row per case (k value, valve setting, rig configuration ...), column
-        names with units (``roll_max_rad``, ``T_bellow_max_K``); ``summary.csv``.
+        names with units (``roll_max_rad``, ``T_bellow_max_K``), each with its validity flags
+        (:mod:`cosim.limits.validity`) and, with faults, what failed; ``summary.csv``.
     shown : tuple of str
         The columns of :meth:`report` (empty: every column).
     series : dict of str to xarray.Dataset
@@ -36,7 +67,8 @@ class Outcome:
         ``case`` (see :mod:`cosim.results.series`); for a rig one Dataset per run. Written as
         ``timeseries/<name>[_<case>].csv``.
     metrics : dict of str to float
-        Totals over the cases (the largest of each headline metric; NaN if a case diverged).
+        Totals over the cases (:meth:`~cosim.kinds.base.Kind.totals`: the largest of each
+        headline metric, the lowest critical speed; NaN if a case diverged).
     cases : list of CaseMetrics
         The checkable metrics of each case (what ``checks:`` are evaluated on).
     diagnoses : list of str

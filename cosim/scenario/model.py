@@ -137,8 +137,8 @@ class CarCircuit:
 class Scenario:
     """A validated scenario (built by :func:`cosim.load.load_scenario`): where it came from
     (file, content hash, overrides, every file read), its k values, its kind's ``experiment`` (the
-    dataclass of its YAML section, also readable as ``scenario.<section>``: ``scenario.twist``,
-    ``scenario.curve``, ``scenario.test``) and its ``circuit``; the car kinds add ``vehicle``,
+    dataclass of its YAML section: a ``TwistTest`` from ``twist:``, a ``CurveTest`` from ``curve:``,
+    a rig test from ``test:``) and its ``circuit``; the car kinds add ``vehicle``,
     ``track``, ``solver``, ``verify``, ``state_limits`` and ``checks``."""
 
     file: Path
@@ -167,12 +167,6 @@ class Scenario:
     #: validity flags (:data:`cosim.limits.validity.FLAGS`) that ``check`` accepts instead of failing on
     allow: Tuple[str, ...] = ()
     raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
-
-    def __getattr__(self, name: str):
-        """``scenario.<section>``: the experiment under the name of its YAML section."""
-        if not name.startswith("_") and name == self.__dict__.get("section"):
-            return self.__dict__["experiment"]
-        raise AttributeError(f"{type(self).__name__!r} of kind {self.__dict__.get('kind')!r} has no attribute {name!r}")
 
     def with_valves(self, valves: bool) -> "Scenario":
         """The same car scenario with its levelling (and differential) valves connected (True) or

@@ -413,14 +413,14 @@ def case_verdict(scenario, record: Optional[Mapping[str, Any]], folder: str) -> 
     so); a check a format-1 record cannot answer says how to recompute the case (``folder``)."""
     status = record["status"] if record else "pending"
     if status in ("ok", "diverged"):
-        outcome = Outcome(scenario, record["rows"], cases=[metrics_from_json(m) for m in record["metrics"]],
+        outcome = Outcome(scenario=scenario, rows=record["rows"], cases=[metrics_from_json(m) for m in record["metrics"]],
                           diagnoses=[record["diagnosis"]] if status == "diverged" else [])
         items = outcome.verdict()["checks"]
         if record.get("format", 1) < RECORD_FORMAT:
             items = [_recompute_hint(item, folder) for item in items]
     else:
         why = f"the case failed ({record['diagnosis']})" if status == "failed" else "the case has not run"
-        outcome = Outcome(scenario, [])
+        outcome = Outcome(scenario=scenario, rows=[])
         items = [outcome.check_item(CheckResult(c, math.nan, "", (why,))) for c in scenario.checks]
     return {"status": overall([item["status"] for item in items]), "checks": items}
 

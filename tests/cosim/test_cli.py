@@ -117,18 +117,18 @@ def test_allowed_validity_flags_do_not_fail_check():
     # cases, the check's NaN value would fail it whatever the flags)
     s = dataclasses.replace(load_scenario(SCENARIOS / "twist_dqq.yaml"), checks=())
     rows = [{"k_W_per_K": 0.0, "validity": "temperature"}]
-    assert Outcome(s, rows).validity_failures() == ["k = 0: temperature"]
-    assert not Outcome(s, rows).checks_hold()
+    assert Outcome(scenario=s, rows=rows).validity_failures() == ["k = 0: temperature"]
+    assert not Outcome(scenario=s, rows=rows).checks_hold()
     allowed = dataclasses.replace(s, allow=("temperature",))
-    assert Outcome(allowed, rows).validity_failures() == []
-    assert Outcome(allowed, rows).checks_hold()
+    assert Outcome(scenario=allowed, rows=rows).validity_failures() == []
+    assert Outcome(scenario=allowed, rows=rows).checks_hold()
 
 
 def test_an_explicit_circuits_valve_label_is_what_it_contains(tmp_path):
     # the throttled-tank example has no levelling valve: its runs are labelled valves off
     from cosim.load import load_scenario
     s = load_scenario(SCENARIOS / "twist_throttled_tanks.yaml")
-    assert s.circuit.valves is False and s.twist.valve_settings == (False,)
+    assert s.circuit.valves is False and s.experiment.valve_settings == (False,)
 
 
 @pytest.mark.parametrize("quiet", [False, True])

@@ -45,7 +45,7 @@ def test_deflated_twist_matches_the_hand_model_of_the_emergency_springs(tmp_path
     s = deflated_twist(tmp_path)
     ds, diagnoses = simulate(s)
     assert not diagnoses
-    dqq = window_mean(ds["time"].values, ds["dqq"].transpose("time", "wheel", "case").values[:, :, 0], s.twist.window)
+    dqq = window_mean(ds["time"].values, ds["dqq"].transpose("time", "wheel", "case").values[:, :, 0], s.experiment.window)
     d = dict(zip(WHEELS, dqq))
     front = (d["1L"] - d["1R"] + d["2L"] - d["2R"]) / 4.0
     rear = (d["3L"] - d["3R"] + d["4L"] - d["4R"]) / 4.0
@@ -54,7 +54,7 @@ def test_deflated_twist_matches_the_hand_model_of_the_emergency_springs(tmp_path
     K_s = p.arb_roll_stiffness_N_m_per_rad + 2.0 * k_sec * (p.airspring_lateral_spacing_m / 2.0) ** 2
     K_p = 4.0 * p.primary_stiffness_z_N_per_m * (p.primary_lateral_spacing_m / 2.0) ** 2
     K = 1.0 / (1.0 / K_s + 1.0 / K_p)
-    expected = K * s.twist.height_m / (4.0 * p.contact_spacing_m ** 2 * MetroCar(p).Q_static_N)
+    expected = K * s.experiment.height_m / (4.0 * p.contact_spacing_m ** 2 * MetroCar(p).Q_static_N)
     print(f"deflated twist: model {(front - rear) / 2.0:.5f}, hand model {expected:.5f}")
     assert (front - rear) / 2.0 == pytest.approx(expected, rel=0.05), ((front - rear) / 2.0, expected)
     # the bellows are empty: each rests on its stop (beyond the 40 mm clearance), at the atmosphere's pressure

@@ -104,7 +104,7 @@ def test_roll_is_measured_from_the_track_plane_at_the_car_centre(tmp_path):
         assert not diag
         runs[name] = s, rec
     s, rec = runs["canted"]
-    c, v, R = s.curve.cant_rad, s.curve.speed_m_per_s, s.curve.radius_m
+    c, v, R = s.experiment.cant_rad, s.experiment.speed_m_per_s, s.experiment.radius_m
     # the car centre starts where MetroCar puts it: the rear wheelset at s = 0
     assert car_centre_s_m(s, np.array([0.0]))[0] == pytest.approx(make_car(s).start_s_m, abs=1e-12)
     t = rec["t_s"]
@@ -153,7 +153,7 @@ def test_per_valve_air_adds_up_to_the_supply_total_and_open_fractions_are_fracti
     valve_names = list(ds["valve"].values)
     assert valve_names
     for j, k in enumerate(ks):
-        row = summary_row(ds.isel(case=j), s.curve)
+        row = summary_row(ds.isel(case=j), s.experiment)
         supplied = sum(row[f"{v}_supply_air_kg"] for v in valve_names)
         assert supplied == pytest.approx(row["air_injected_kg"], rel=1e-9, abs=1e-12)
         assert row["air_injected_kg"] > 0

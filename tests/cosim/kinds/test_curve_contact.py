@@ -113,7 +113,7 @@ def test_steady_canted_arc_rails_carry_the_unbalanced_centripetal_force(tmp_path
     if cant != 0.03:
         return
     # the summary: the leading outer wheel flanges, with the largest Y/Q, below Nadal's limit
-    row = summary_row(case, s.curve)
+    row = summary_row(case, s.experiment)
     assert row["yq_lim"] == pytest.approx(1.2003, abs=1e-4)
     # from each wheelset's static load on the contact at t = 0 (29.43 kN up to the 0.01 N the
     # law's smoothed table moves the centred wheelset's rigid pose)
@@ -144,7 +144,7 @@ def test_kinematic_run_has_no_wheel_rail_columns(tmp_path):
     ds, _ = simulate(s)
     cols = case_columns(ds, ds["case"].values[0])
     assert not [c for c in cols if c.startswith(("Y_", "sumY", "y_ws", "aoa", "flange", "YQ"))]
-    row = summary_row(ds.isel(case=0), s.curve)
+    row = summary_row(ds.isel(case=0), s.experiment)
     assert "yq_max" not in row and "sum_y_max_N" not in row and "dqq_raw_max" in row
 
 
@@ -179,7 +179,7 @@ IRREGULAR = dict(speed_m_per_s=20.0, straight_m=400.0, arc_m=20.0, duration_s=1.
 def _generated(path) -> bytes:
     """The scenario's irregularity generated in a fresh Python process (no cache shared)."""
     code = ("import sys; from cosim.load import load_scenario; s = load_scenario(sys.argv[1]); "
-            "t = s.curve.track_irregularity(s.vehicle); sys.stdout.buffer.write(t.s_m.tobytes() + t.lateral_m.tobytes())")
+            "t = s.experiment.track_irregularity(s.vehicle); sys.stdout.buffer.write(t.s_m.tobytes() + t.lateral_m.tobytes())")
     return subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, check=True, cwd=ROOT).stdout
 
 
@@ -205,7 +205,7 @@ def test_irregularity_file_relative_to_the_scenario(tmp_path):
     (tmp_path / "track").mkdir()
     TrackIrregularity(s, lat, 0 * s, 0 * s, 0 * s).to_csv(tmp_path / "track" / "irr.csv")
     scen = load(tmp_path, scenario_data(irregularity={"file": "track/irr.csv"}))
-    got = scen.curve.track_irregularity(scen.vehicle)
+    got = scen.experiment.track_irregularity(scen.vehicle)
     assert np.array_equal(got.lateral_m, lat) and np.array_equal(got.s_m, s)
     # not zero under the car at t = 0
     TrackIrregularity(s, 1e-3 + 0 * s, 0 * s, 0 * s, 0 * s).to_csv(tmp_path / "track" / "bad.csv")
@@ -253,10 +253,10 @@ def test_contact_model_keys_reach_the_car(tmp_path):
     """curve.contact_damping_N_s_per_m and curve.contact_smoothing_mm set the contact law's
     ContactParams; null keeps its defaults."""
     s = load(tmp_path, scenario_data(contact_damping_N_s_per_m=4e5, contact_smoothing_mm=0.2))
-    cp = s.curve.contact_params()
+    cp = s.experiment.contact_params()
     assert (cp.normal_damping_N_s_per_m, cp.table_smoothing_mm, cp.friction_coefficient) == (4e5, 0.2, 0.36)
     s = load(tmp_path, scenario_data(friction_coefficient=None))
-    assert s.curve.contact_params() == ContactParams()
+    assert s.experiment.contact_params() == ContactParams()
 
 
 @pytest.mark.parametrize("name", sorted(BAD))
@@ -272,12 +272,12 @@ def test_shipped_contact_scenarios_load():
                  "straight_irregular.yaml", "curve_canted.yaml"):
         s = load_scenario(SCENARIOS / name)
         # EN 14363's processed quantities, not a raw sampled peak
-        assert s.curve.contact and {c.metric for c in s.checks} - {"Y_2m_p50"} == {"yq_2m_p9985", "sum_y_2m_p9985",
+        assert s.experiment.contact and {c.metric for c in s.checks} - {"Y_2m_p50"} == {"yq_2m_p9985", "sum_y_2m_p9985",
                                                                                    "dqq_2m_p9985"}
     s = load_scenario(SCENARIOS / "straight_irregular.yaml")
-    t = s.curve.track_irregularity(s.vehicle)
+    t = s.experiment.track_irregularity(s.vehicle)
     assert t.vertical_m.any() == False and np.abs(t.lateral_m).max() > 1e-3  # noqa: E712 (lateral only)
-    assert dataclasses.replace(s.curve, irregularity=None).track_irregularity(s.vehicle) is None
+    assert dataclasses.replace(s.experiment, irregularity=None).track_irregularity(s.vehicle) is None
 
 
 def test_the_method_1_dip_lowers_the_outer_rail_within_the_twist_limits():
@@ -286,8 +286,8 @@ def test_the_method_1_dip_lowers_the_outer_rail_within_the_twist_limits():
     base, while the inner rail stays at design height. Checked on the rail heights the car
     reads (z_L = vertical - cross/2, z_R = vertical + cross/2), not on the file's numbers."""
     s = load_scenario(SCENARIOS / "curve_r150_dip.yaml")
-    assert s.curve.direction == 1 and s.curve.radius_m == 150.0 and s.curve.cant_rad == 0.0
-    t = s.curve.track_irregularity(s.vehicle)
+    assert s.experiment.direction == 1 and s.experiment.radius_m == 150.0 and s.experiment.cant_rad == 0.0
+    t = s.experiment.track_irregularity(s.vehicle)
     x = np.arange(0.0, 110.0, 0.05)
     _, vertical, cross, _ = t(x)
     z_left, z_right = vertical - 0.5 * cross, vertical + 0.5 * cross

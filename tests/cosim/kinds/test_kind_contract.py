@@ -12,9 +12,10 @@ import pytest
 import yaml
 
 from cosim import cli
+from cosim.engine.master import OUTPUTS, Output
 from cosim.kinds import KINDS
 from cosim.kinds.base import CarKind, Kind
-from cosim.results.outcome import Outcome
+from cosim.results.outcome import Computed
 
 from helpers import SCENARIOS
 
@@ -82,12 +83,20 @@ class BrakingTest:
     valve_settings: Tuple[bool, ...] = (False,)
 
 
+def _carbody_lateral_m(sample) -> np.ndarray:
+    """The toy kind's own output: each car's carbody lateral displacement (module level: the
+    outputs travel to the worker processes)."""
+    return np.array([car.carbody_lateral_m() for car in sample.sim.cars])
+
+
 class BrakingKind(CarKind):
-    """A new kind as a user would sketch one: a section, a car, a run and a checkable metric; the
-    rest (figures, zones, checks refused, compare) the contract's defaults."""
+    """A new kind as a user would sketch one: a section, a car, a run, a checkable metric and an
+    output of its own; the rest (figures, zones, checks refused, compare) the contract's
+    defaults."""
 
     name, section, experiment = "braking", "braking", BrakingTest
     check_metrics = headline_metrics = ("roll_max_rad",)
+    outputs = (Output("carbody_lateral_m", (), "m", "carbody lateral displacement", "y_carbody_m", _carbody_lateral_m),)
 
     def parse(self, data, vehicle, path):
         from cosim.scenario.schema import build
@@ -102,14 +111,12 @@ class BrakingKind(CarKind):
 
     def run(self, scenario, progress):
         from cosim.engine.cases import simulate_cases
-        from cosim.limits.checks import CaseMetrics
         ds, diagnoses = simulate_cases(scenario, scenario.braking.valve_settings, self.make_car,
-                                       scenario.braking.duration_s, progress)
+                                       scenario.braking.duration_s, progress, self.outputs)
         rows = [{"valves": bool(ds["valves"].values[j]), "k_W_per_K": float(ds["k_W_per_K"].values[j]),
                  "roll_max_rad": float(np.abs(ds["roll_rad"].values[:, j]).max())} for j in range(ds.sizes["case"])]
-        cases = [CaseMetrics(r["k_W_per_K"], r["valves"], {"roll_max_rad": r["roll_max_rad"]}) for r in rows]
-        return Outcome(scenario, rows, ("valves", "k_W_per_K", "roll_max_rad"), {"braking": ds},
-                       metrics={"roll_max_rad": max(r["roll_max_rad"] for r in rows)}, cases=cases, diagnoses=diagnoses)
+        # the rows, series and diagnoses: the runner builds the Outcome (totals, checkable metrics)
+        return Computed(rows, ("valves", "k_W_per_K", "roll_max_rad"), {"braking": ds}, diagnoses=diagnoses)
 
 
 def test_a_kind_without_its_required_methods_cannot_be_registered():
@@ -140,6 +147,10 @@ def test_a_new_kind_is_one_class_in_one_file(tmp_path, monkeypatch, capsys):
     assert cli.main(["check", str(path), "--out", str(out), "--quiet"]) == cli.EXIT_OK
     assert json.loads((out / "check.json").read_text())["checks"][0]["status"] == "pass"
     assert (out / "timeseries").is_dir() and (out / "summary.csv").exists()
+    # its own output is sampled in its runs, labelled and written, and in no other kind's
+    columns = (out / "timeseries" / "braking_valves=off_k=0.csv").read_text().splitlines()[0].split(",")
+    assert "y_carbody_m" in columns and "Q_1L_N" in columns
+    assert not any(o.name == "carbody_lateral_m" for o in OUTPUTS)
     assert cli.main(["report", str(out), "--out", str(tmp_path / "report.html")]) == cli.EXIT_OK
     data["braking"]["duration"] = 1.0                       # a mistyped key of the new section
     path.write_text(yaml.safe_dump(data))

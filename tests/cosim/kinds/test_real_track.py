@@ -248,7 +248,7 @@ def test_the_cases_that_failed_run_at_the_shipped_steps(guidance, cant):
         assert 0.3 < outcome.rows[0]["dqq_2m_max"] < 1.0
         warned = [w for w in outcome.warnings if "roll rate" in w]
         assert bool(warned) == (shape == "linear")
-    assert ramp_roll_rate_step_rad_per_s(canted_curve(guidance, 0.1016, "curve.transition_shape=linear").curve) \
+    assert ramp_roll_rate_step_rad_per_s(canted_curve(guidance, 0.1016, "curve.transition_shape=linear").experiment) \
         == pytest.approx(0.0677, abs=1e-4)
 
 

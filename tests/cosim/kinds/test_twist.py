@@ -39,7 +39,7 @@ def quasi_static_dqq(s, valves=False):
     ds, diag = simulate(s.with_experiment(valve_settings=(valves,)))
     assert not diag
     dqq = ds["dqq"].transpose("time", "wheel", "case").values
-    return window_mean(ds["time"].values, dqq, s.twist.window), dqq
+    return window_mean(ds["time"].values, dqq, s.experiment.window), dqq
 
 
 def wheel_loads(s):
@@ -300,7 +300,7 @@ def test_a_case_does_not_depend_on_the_cases_its_circuit_batches(tmp_path):
 # ----------------------------------------------------------------------------- EN 14363 geometry
 def test_en14363_rail_heights_give_both_twists(tmp_path):
     s = en_scenario(tmp_path)
-    test, car = s.twist, MetroCar(s.vehicle)
+    test, car = s.experiment, MetroCar(s.vehicle)
     # the loader holds the bases to the car's: the rail profile is evaluated at the real wheelsets
     assert np.allclose(wheelset_x_m(test), car.wheelset_x_m, rtol=0, atol=1e-12)
     h = rail_heights(test)(test.duration_s).reshape(4, 2)       # (wheelset, left/right)
@@ -314,7 +314,7 @@ def test_en14363_rail_heights_give_both_twists(tmp_path):
     assert np.allclose(rail_heights(test)(0.5 * test.ramp_s), 0.5 * rail_heights(test)(test.duration_s), rtol=1e-12)
     assert np.all(rail_heights(test)(0.0) == 0.0)
     # without the bogie twist: the paper's Fig. 7, 40 mm under 1R and 2R, exactly as before
-    fig7 = rail_heights(scenario(tmp_path).twist)(10.0)
+    fig7 = rail_heights(scenario(tmp_path).experiment)(10.0)
     assert np.array_equal(fig7, np.array([0, 0.04, 0, 0.04, 0, 0, 0, 0]) * (fig7[1] / 0.04))
     assert fig7[1] == pytest.approx(0.04, rel=1e-12)
 
@@ -361,13 +361,13 @@ def test_bogie_twist_alone_loads_the_wheels_through_the_primary_roll_stiffness(t
         ΔQ/Q0 = +-(k_z b_p^2 + k_y r^2 chi) h+ / ((2b)^2 Q0),
     1L and 2R unloading, 1R and 2L loading; the carbody and the rear bogie see nothing."""
     s = en_scenario(tmp_path, twist_per_mille=0.0, ramp_s=2.0, hold_s=1.0)
-    assert s.twist.height_m == 0.0 and s.twist.bogie_height_m == pytest.approx(0.014, rel=1e-12)
+    assert s.experiment.height_m == 0.0 and s.experiment.bogie_height_m == pytest.approx(0.014, rel=1e-12)
     qs, _ = quasi_static_dqq(s)
     p, Q0 = s.vehicle, MetroCar(s.vehicle).Q_static_N
     two_b, b_p, a, r = p.contact_spacing_m, p.primary_lateral_spacing_m / 2.0, p.wheelbase_m / 2.0, p.wheel_radius_m
     kx, ky, kz = p.primary_stiffness_x_N_per_m, p.primary_stiffness_y_N_per_m, p.primary_stiffness_z_N_per_m
     chi = kx * b_p ** 2 / (kx * b_p ** 2 + ky * a ** 2)
-    expected = (kz * b_p ** 2 + ky * r ** 2 * chi) * s.twist.bogie_height_m / two_b ** 2 / Q0
+    expected = (kz * b_p ** 2 + ky * r ** 2 * chi) * s.experiment.bogie_height_m / two_b ** 2 / Q0
     sign = np.array([1, -1, -1, 1, 0, 0, 0, 0])              # 1L 1R 2L 2R 3L 3R 4L 4R
     # 2 % of the bogie-twist term: the hand model leaves out couplings below that -- the frame
     # pitches (its wheelsets heave by +-h+/4), which shears the bellows and pitches the carbody:
@@ -385,8 +385,8 @@ def test_a_diverged_case_names_no_worst_wheel(tmp_path):
     dqq = np.zeros((201, 8, 1))
     dqq[:100, 2, 0] = 0.1
     dqq[150:, :, 0] = np.nan
-    row = twist_metrics(t, dqq, s.twist, 0)
+    row = twist_metrics(t, dqq, s.experiment, 0)
     assert math.isnan(row["dqq_max"]) and row["dqq_max_wheel"] == "" and math.isnan(row["t_dqq_max_s"])
     assert math.isnan(row["dqq_qs_max"]) and row["dqq_qs_max_wheel"] == ""
-    healthy = twist_metrics(t[:150], dqq[:150], s.twist, 0)
+    healthy = twist_metrics(t[:150], dqq[:150], s.experiment, 0)
     assert healthy["dqq_max"] == 0.1 and healthy["dqq_max_wheel"] == "2L"

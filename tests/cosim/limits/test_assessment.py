@@ -209,7 +209,7 @@ def test_the_floor_feels_the_uncompensated_acceleration_in_a_steady_arc(tmp_path
     ds, _ = simulate(s)
     case = ds.isel(case=0).where(ds["time"] >= 6.0, drop=True)
     phi = case["roll_rad"]
-    g, a_c = s.vehicle.gravity_m_per_s2, s.curve.speed_m_per_s ** 2 / s.curve.radius_m
+    g, a_c = s.vehicle.gravity_m_per_s2, s.experiment.speed_m_per_s ** 2 / s.experiment.radius_m
     centre = case.sel(floor_point="centre")
     lateral, vertical = xr.DataArray(a_c * np.cos(phi) + g * np.sin(phi)), xr.DataArray(g * np.cos(phi) - a_c * np.sin(phi))
     assert float(centre["floor_ay_m_per_s2"].mean()) == pytest.approx(float(lateral.mean()), rel=0.01)
@@ -242,9 +242,9 @@ def test_the_stability_quantity_finds_the_hunting_frequency_and_its_rms():
 def test_a_run_with_coarse_output_is_assessed_without_its_accelerations(tmp_path):
     # outputs every 50 ms (20 Hz) cannot hold the 0.4-10 Hz band: the run says so and keeps every
     # other number (it used to stop with a ValueError after the simulation)
-    from cosim.kinds.curve_entry import run
     from cosim.load import load_scenario
     from cosim.results.io import Progress
+    from cosim.runner import run
 
     from helpers import SCENARIOS
     s = load_scenario(SCENARIOS / "curve_entry_contact.yaml", ["curve.duration_s=4", "curve.valve_settings=[false]",

@@ -141,7 +141,7 @@ def test_selectors_are_checked_against_the_scenario(tmp_path):
 
 
 def _outcome(scenario, cases):
-    return Outcome(scenario, rows=[{"k_W_per_K": c.k} for c in cases], cases=cases)
+    return Outcome(scenario=scenario, rows=[{"k_W_per_K": c.k} for c in cases], cases=cases)
 
 
 def test_checks_take_the_largest_value_over_the_selected_cases(tmp_path):
@@ -197,11 +197,11 @@ def test_bad_twist_keys(tmp_path, changes, where, reason):
 
 def test_twist_defaults_keep_the_papers_arrangement(tmp_path):
     s = load(tmp_path, short_twist())
-    t = s.twist
+    t = s.experiment
     assert t.bogie_base_m is None and t.bogie_height_m == 0.0 and t.valve_settings is None
     assert t.window == 1.0                      # default 5 s, clipped to the 1 s hold
-    assert load_scenario(SCENARIOS / "twist_dqq.yaml").twist.window == 5.0
-    en = load_scenario(SCENARIOS / "twist_en14363.yaml").twist
+    assert load_scenario(SCENARIOS / "twist_dqq.yaml").experiment.window == 5.0
+    en = load_scenario(SCENARIOS / "twist_en14363.yaml").experiment
     assert en.height_m == pytest.approx(0.040, rel=1e-12) and en.bogie_height_m == pytest.approx(0.014, rel=1e-12)
     assert en.valve_settings == (False, True)
 

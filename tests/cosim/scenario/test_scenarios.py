@@ -146,7 +146,7 @@ def test_set_override_is_validated(tmp_path):
     with pytest.raises(ScenarioError) as info:
         load_scenario(path, overrides=["test.ramp_s=-1"])
     assert info.value.path == "test.ramp_s"
-    assert load_scenario(path, overrides=["test.ramp_s=2"]).test.ramp_s == 2.0
+    assert load_scenario(path, overrides=["test.ramp_s=2"]).experiment.ramp_s == 2.0
 
 
 def test_amplitude_beyond_the_bellow_stroke_is_rejected(tmp_path):

@@ -211,7 +211,7 @@ def test_the_least_damped_modes_are_labelled_by_what_moves(tmp_path):
     car = make_car(s, 10.0)
     F0 = car.static_bellow_forces_N()
     air = _air(s, False, 10.0, F0)
-    found = modes(couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.stability, s.vehicle))(10.0), air))
+    found = modes(couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.experiment, s.vehicle))(10.0), air))
     low = [m for m in found if 0.0 < m.frequency_Hz < 20.0]
     labels = {m.label for m in low}
     assert {"carbody bounce", "carbody pitch", "carbody yaw", "carbody lower sway", "carbody upper sway", "air"} <= labels
@@ -260,7 +260,7 @@ def test_brute_force_onset_on_a_cone_agrees_with_the_linear_critical_speed(tmp_p
     from cosim.kinds.stability import _air, _Cars, contact_params, make_car
     F0 = make_car(s, 10.0).static_bellow_forces_N()
     air = _air(s, False, 10.0, F0)
-    linear = modes(couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.stability, s.vehicle))(below["speed_m_per_s"]), air))
+    linear = modes(couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.experiment, s.vehicle))(below["speed_m_per_s"]), air))
     sigma = max(m.eigenvalue.real for m in linear if m.frequency_Hz > 0 and "hunting" in m.label)
     assert below["growth_rate_per_s"] == pytest.approx(sigma, rel=0.05)
 
@@ -428,7 +428,7 @@ def test_floor_acceleration_rms_against_the_linearised_model(tmp_path):
     car = make_car(s, V)
     F0 = car.static_bellow_forces_N()
     air = _air(s, False, k, F0)
-    model = couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.stability, s.vehicle), rail_inputs=True)(V), air)
+    model = couple(_Cars(s, F0, np.diag(air.G_z), contact_params(s.experiment, s.vehicle), rail_inputs=True)(V), air)
     shortest, longest = data["ride"]["irregularity"]["wavelength_range_m"]
     omega = np.linspace(2 * np.pi / longest, 2 * np.pi / shortest, 20001)
     H = level_response(model, omega * V, car.wheelset_x_m, ("carbody", "z"))

@@ -215,7 +215,7 @@ def _fail_one(target_ms):
     real = sw._run_scenario
 
     def patched(scenario, out_dir):
-        if scenario.twist.ramp_s == target_ms:
+        if scenario.experiment.ramp_s == target_ms:
             raise RuntimeError("solver exploded")
         return real(scenario, out_dir)
     return patched
@@ -241,7 +241,7 @@ def test_a_killed_worker_fails_only_its_case_and_a_rerun_completes_the_sweep(tmp
     real = sw._run_scenario
 
     def killer(scenario, out_dir):           # runs in the forked pool workers
-        if scenario.twist.ramp_s == 0.4:
+        if scenario.experiment.ramp_s == 0.4:
             os.kill(os.getpid(), signal.SIGKILL)
         return real(scenario, out_dir)
     monkeypatch.setattr(sw, "_run_scenario", killer)
@@ -260,7 +260,7 @@ def test_ctrl_c_keeps_what_finished_and_says_how_to_resume(tmp_path, monkeypatch
     real = sw._run_scenario
 
     def interrupt(scenario, out_dir):
-        if scenario.twist.ramp_s == 0.4:
+        if scenario.experiment.ramp_s == 0.4:
             raise KeyboardInterrupt
         return real(scenario, out_dir)
     monkeypatch.setattr(sw, "_run_scenario", interrupt)
@@ -542,7 +542,7 @@ def _csv_column(check, scenario) -> str:
         assert check.zone is None
         return check.metric
     if check.zone is not None:
-        zones = curve_entry.zones(scenario.curve)
+        zones = curve_entry.zones(scenario.experiment)
         covered = [z for z in zones if z in en14363.CURVE_ZONES] if check.metric in en14363.QUASI_STATIC else zones
         assert covered == [check.zone], f"{check.text}: the summary column is the worst over {covered}"
     return en14363.METRICS[check.metric][2]

@@ -67,7 +67,7 @@ def _cosim(scenario, make_car, duration_s):
 
 def test_twist_cosimulation_matches_monolithic_reference():
     scenario = _twist_scenario()
-    T = scenario.twist.duration_s                                        # 2 s
+    T = scenario.experiment.duration_s                                        # 2 s
     cosim = twist.record_headlines(scenario, _cosim(scenario, twist.make_car, T))
     record = run_monolithic(scenario, 0.0, T, 0.005)
     assert record.monolithic.stats.steps == 400                          # the fixed step held throughout
@@ -85,7 +85,7 @@ def test_curve_with_valves_cosimulation_matches_monolithic_reference():
     scenario = load_scenario(SCENARIOS / "curve_entry.yaml",
                              ["solver.jobs=1", "curve.straight_m=12", "curve.duration_s=3"], [0.0])
     scenario = scenario.with_valves(True)
-    T = scenario.curve.duration_s
+    T = scenario.experiment.duration_s
     cosim = curve.record_headlines(scenario, _cosim(scenario, curve.make_car, T), window_s=1.0)
     record = run_monolithic(scenario, 0.0, T, scenario.solver.mechanics_step_s)
     mono = curve.record_headlines(scenario, record.arrays(), window_s=1.0)
