@@ -42,8 +42,8 @@ class Kind(ABC):
     name : str
         ``kind:`` in the scenario file.
     section : str
-        The YAML section of its experiment (``twist``, ``curve``, ``test``); the scenario's
-        experiment is also ``scenario.<section>``.
+        The YAML section of its experiment (``twist``, ``curve``, ``test``); the scenario holds
+        what it builds as ``scenario.experiment``.
     experiment : type
         The experiment dataclass the section builds.
     car : bool
