@@ -22,6 +22,7 @@ from cosim.engine.cases import build_cosimulation
 from cosim.engine.master import Record
 from cosim.kinds import ride
 from cosim.load import load_scenario
+from cosim.runs import track_run
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "ride_comfort.yaml"
 STAGES = ("_force_laws", "_advance_cars", "_advance_air", "sample")
@@ -44,7 +45,7 @@ def build(scenario, k_values):
     """The co-simulation of the ride ``scenario``'s first speed, one car per k value."""
     curve, _ = ride.curve_at(scenario.experiment, scenario.experiment.speeds_m_per_s[0], scenario.vehicle)
     speed_scenario = ride._speed_scenario(scenario, curve)
-    return build_cosimulation(speed_scenario, k_values, ride.curve_entry.make_car)
+    return build_cosimulation(speed_scenario, k_values, track_run.make_car)
 
 
 def once(scenario, k_values, seconds: float, split: bool):

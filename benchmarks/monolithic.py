@@ -25,9 +25,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from cosim.engine.cases import build_cosimulation  # noqa: E402
-from cosim.kinds import curve_entry as curve_mod  # noqa: E402
 from cosim.kinds import twist as twist_mod  # noqa: E402
 from cosim.load import load_scenario  # noqa: E402
+from cosim.runs import track_run as curve_mod  # noqa: E402
 from cosim.verification.monolithic import run_monolithic  # noqa: E402
 
 SCENARIOS = ROOT / "scenarios"

@@ -41,9 +41,9 @@ from pathlib import Path
 import numpy as np
 
 from cosim.kinds import KINDS
-from cosim.kinds.curve_entry import CurveTest
 from cosim.load import load_scenario
 from cosim.runner import run
+from cosim.runs.track_spec import CurveTest
 from cosim.verification.verify import estimates, refined
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "curve_entry.yaml"

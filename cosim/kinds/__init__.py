@@ -8,11 +8,12 @@ is checked and run, what it draws, its metrics and what ``compare`` overlays), a
 * :mod:`cosim.kinds.curve_entry`: a run into a curve (paper §4.2): ``curve_entry``;
 * :mod:`cosim.kinds.ride`: ride comfort on irregular track at a list of speeds: ``ride``;
 * :mod:`cosim.kinds.stability`: linear running stability (eigenvalues, critical speed): ``stability``;
-* :mod:`cosim.kinds.car`: what the car kinds share besides running their cases (the engine's,
-  :mod:`cosim.engine.cases`): wheel unloading, per-case curves, air accounts, faults.
 
-The EN 14363 assessment of a run on track and the comfort columns of a car run are criteria, in
-:mod:`cosim.limits.en14363` and :mod:`cosim.limits.ride_comfort`.
+The kinds compose the runs of :mod:`cosim.runs` (what every car run shares: wheel unloading, air
+accounts, faults; the run of the car along a track: its spec, simulation, summary row and figures
+along the track) on the engine (:mod:`cosim.engine.cases`); the EN 14363 assessment of a run on
+track and the comfort columns of a car run are criteria, in :mod:`cosim.limits.en14363` and
+:mod:`cosim.limits.ride_comfort`.
 
 A new kind is a subclass of :class:`~cosim.kinds.base.CarKind` (or ``RigKind``) that implements
 ``run`` (and what its section needs: ``parse``, ``duration_s``, ``make_car``), and its instance in

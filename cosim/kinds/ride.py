@@ -8,7 +8,7 @@ Each speed is a run along a track built for it (:func:`curve_at`): the car start
 track, the irregularity fades in ahead of it, the record starts ``settle_s`` later (in a curve:
 once the whole car is in the arc as well) and lasts ``record_s``. The speeds run on one pool of
 ``solver.jobs`` processes, a speed's k values on one circuit where the processes allow
-(:func:`cosim.kinds.curve_entry.simulate_many`)."""
+(:func:`cosim.runs.track_run.simulate_many`)."""
 from __future__ import annotations
 
 import dataclasses
@@ -19,15 +19,17 @@ from typing import Dict, List, Mapping, Optional, Tuple
 import numpy as np
 
 from cosim.errors import ScenarioError
-from cosim.kinds import curve_entry
 from cosim.kinds.base import CarKind
-from cosim.kinds.car import fault_columns
-from cosim.kinds.curve_entry import MAX_SPEED_M_PER_S, CurveTest, IrregularitySpec, parse_irregularity
 from cosim.limits.ride_comfort import COLUMNS, comfort_columns
 from cosim.results.io import Progress, read_rows
 from cosim.results.outcome import Computed, Outcome, warn
 from cosim.results.overlay import Selection
 from cosim.results.plots import Curve, Figure, Panel, Span, k_legend, save_panels
+from cosim.runs.along_track import along_track, track_axis
+from cosim.runs.car import fault_columns
+from cosim.runs.track_run import make_car as track_car
+from cosim.runs.track_run import simulate_many, summary_row, track_twist_warnings
+from cosim.runs.track_spec import MAX_SPEED_M_PER_S, CurveTest, IrregularitySpec, parse_irregularity
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import Range, build, check_valve_settings, positive
 from vehicle.params import FLOOR_POINTS, VehicleParams
@@ -36,6 +38,11 @@ from vehicle.params import FLOOR_POINTS, VehicleParams
 DEFAULT_IRREGULARITY = {"psd": "erri_b176_low", "seed": 0, "channels": ["lateral", "vertical", "cross_level", "gauge"]}
 #: room left on the track after the record [m]
 TRACK_MARGIN_M = 30.0
+#: a straight ride's track is longer by this [m]: it was the straight with a 15 m transition and a
+#: 20 m arc of R = 10 km beyond the car's reach; the irregularity spans the whole track and its
+#: length sets the PSD's frequency grid, so the same length keeps the same seeded track (and every
+#: ride number) on the straight alone
+STRAIGHT_TAIL_M = 35.0
 
 
 @dataclass(frozen=True)
@@ -43,7 +50,7 @@ class RideTest:
     """A ride at each of ``speeds_m_per_s`` for ``settle_s`` + ``record_s`` (EN 12299 evaluates 5
     minutes: the default), on straight track (``radius_m``: null) or in a curve of ``radius_m``
     with ``cant_rad``, entered over a Bloss transition of ``transition_m`` after a 20 m straight.
-    ``irregularity``: as a curve's (:class:`~cosim.kinds.curve_entry.IrregularitySpec`; default ERRI
+    ``irregularity``: as a curve's (:class:`~cosim.runs.track_spec.IrregularitySpec`; default ERRI
     B176 low in all four channels, seed 0). ``valve_settings``: runs with the levelling and
     differential valves disconnected (false) and connected (true)."""
 
@@ -67,8 +74,8 @@ def curve_at(ride: RideTest, speed_m_per_s: float, vehicle: VehicleParams) -> Tu
     car = vehicle.bogie_centre_distance_m + vehicle.wheelbase_m
     v = float(speed_m_per_s)
     if ride.radius_m is None:
-        straight = car + v * (ride.settle_s + ride.record_s) + TRACK_MARGIN_M
-        curve = CurveTest(speed_m_per_s=v, straight_m=straight, transition_m=15.0, radius_m=1.0e4, arc_m=20.0,
+        straight = car + v * (ride.settle_s + ride.record_s) + TRACK_MARGIN_M + STRAIGHT_TAIL_M
+        curve = CurveTest(speed_m_per_s=v, straight_m=straight, radius_m=None,
                           duration_s=ride.settle_s + ride.record_s, valve_settings=ride.valve_settings,
                           irregularity=ride.irregularity, window_s=min(5.0, ride.settle_s + ride.record_s))
         return curve, ride.settle_s
@@ -139,12 +146,13 @@ def extra_files(ride: RideTest) -> Tuple[Path, ...]:
 def make_car(scenario: Scenario):
     """The car of the first speed's run (:func:`run` builds each speed's through its curve)."""
     ride = scenario.experiment
-    return curve_entry.make_car(_speed_scenario(scenario, curve_at(ride, ride.speeds_m_per_s[0], scenario.vehicle)[0]))
+    return track_car(_speed_scenario(scenario, curve_at(ride, ride.speeds_m_per_s[0], scenario.vehicle)[0]))
 
 
 def _speed_scenario(scenario: Scenario, curve: CurveTest) -> Scenario:
-    """The scenario of one speed: a curve-entry run on its track, for the car kinds' machinery."""
-    return dataclasses.replace(scenario, kind="curve_entry", section="curve", experiment=curve)
+    """The scenario of one speed: the ride's, running the track run of that speed
+    (:mod:`cosim.runs.track_run` reads its experiment)."""
+    return dataclasses.replace(scenario, experiment=curve)
 
 
 def run(scenario: Scenario, progress: Progress) -> Computed:
@@ -157,17 +165,17 @@ def run(scenario: Scenario, progress: Progress) -> Computed:
     rows, series, diagnoses = [], {}, []
     runs = [curve_at(ride, v, scenario.vehicle) for v in ride.speeds_m_per_s]
     warnings: List[str] = []
-    for message in curve_entry.track_twist_warnings(runs[0][0].track(), scenario.vehicle):  # the same ramp at every speed
+    for message in track_twist_warnings(runs[0][0].track(), scenario.vehicle):  # the same ramp at every speed
         warn(warnings, message)
     # all speeds on one pool: a speed's k values share a process and a circuit where the processes allow
-    results = curve_entry.simulate_many([_speed_scenario(scenario, curve) for curve, _ in runs], progress,
+    results = simulate_many([_speed_scenario(scenario, curve) for curve, _ in runs], progress,
                                         [f"{scenario.name} {v:g} m/s" for v in ride.speeds_m_per_s])
     for v, (curve, start), (ds, found) in zip(ride.speeds_m_per_s, runs, results):
         diagnoses += [f"{v:g} m/s: {d}" for d in found]
         series[f"ride_v={v:g}"] = ds
         for j in range(ds.sizes["case"]):
             case = ds.isel(case=j)
-            row = {"speed_m_per_s": float(v), **curve_entry.summary_row(case, curve), "record_from_s": start}
+            row = {"speed_m_per_s": float(v), **summary_row(case, curve), "record_from_s": start}
             row.update(comfort_columns(case, start))
             row.update(fault_columns(scenario, case))
             rows.append(row)
@@ -229,7 +237,7 @@ def legend(valves: bool, k: float, valves_named: bool) -> str:
 
 def floor_figures(outcome: Outcome) -> List[Figure]:
     """The lateral and vertical (less g) floor accelerations at the car centre, a panel per speed
-    and direction, against time and along the track (:func:`cosim.kinds.curve_entry.along_track`:
+    and direction, against time and along the track (:func:`cosim.runs.along_track.along_track`:
     each speed's own track, its segments and the comfort record marked)."""
     ride, scenario = outcome.scenario.experiment, outcome.scenario
     multi = len(ride.valve_settings) > 1
@@ -237,7 +245,7 @@ def floor_figures(outcome: Outcome) -> List[Figure]:
     for v in ride.speeds_m_per_s:
         ds = outcome.series[f"ride_v={v:g}"]
         curve, start = curve_at(ride, v, scenario.vehicle)
-        axis = curve_entry.track_axis(_speed_scenario(scenario, curve), ds["time"].values)
+        axis = track_axis(_speed_scenario(scenario, curve), ds["time"].values)
         record = Span(float(np.interp(start, ds["time"].values, axis.centre_m)), float(axis.centre_m[-1]),
                       f"comfort record from t = {start:g} s", shade=False)
         for axis_name, long, offset in (("y", "lateral", 0.0),
@@ -251,7 +259,7 @@ def floor_figures(outcome: Outcome) -> List[Figure]:
             spans.append([*axis.spans, record])
     where = "straight track" if ride.radius_m is None else f"R = {ride.radius_m:g} m, {axis.outer_text}"
     figure = Figure("floor_accelerations.png", panels, f"Floor accelerations at the car centre ({where})", 2)
-    return curve_entry.along_track(figure, positions, spans, "car centre")
+    return along_track(figure, positions, spans, "car centre")
 
 
 def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:

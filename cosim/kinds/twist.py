@@ -14,13 +14,13 @@ import xarray as xr
 from cosim.engine.cases import simulate_cases
 from cosim.errors import ScenarioError
 from cosim.kinds.base import CarKind
-from cosim.kinds.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import DQQ_LIMIT, en14363_twist_limit, static_wheel_loads, wheel_unloading, window_drift, window_mean
 from cosim.results.io import Progress
 from cosim.results.outcome import Computed, Outcome, warn
 from cosim.results.overlay import Selection, case_series, worst_wheels
 from cosim.results.plots import Curve, Figure, Panel, Span, save_panels
+from cosim.runs.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case
 from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
 from cosim.scenario.schema import Range, build, check_valve_settings, k_label, positive
 from vehicle.params import WHEELS, VehicleParams

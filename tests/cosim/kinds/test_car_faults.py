@@ -130,7 +130,7 @@ def test_a_run_that_stopped_before_its_fault_keeps_its_rows(tmp_path):
     """Interrupted (or every case stopped) before the fault: no transient columns, no error."""
     import xarray as xr
 
-    from cosim.kinds.car import fault_columns
+    from cosim.runs.car import fault_columns
     s = burst_in_curve(tmp_path, 0.005, "early.yaml")
     t = np.arange(0.0, 0.5, 0.01)
     case = xr.Dataset({"roll_rad": ("time", np.zeros_like(t)), "dqq": (("time", "wheel"), np.zeros((t.size, 8)))},

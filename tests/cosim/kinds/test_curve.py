@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import yaml
 
-from cosim.kinds.curve_entry import car_centre_s_m, make_car, simulate, summary_row, track_roll_rad
 from cosim.limits.criteria import window_mean
 from cosim.load import load_scenario
+from cosim.runs.track_run import car_centre_s_m, make_car, simulate, summary_row, track_roll_rad
 
 from helpers import SCENARIOS, write_scenario
 

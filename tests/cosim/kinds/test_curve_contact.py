@@ -15,10 +15,10 @@ import yaml
 
 from cosim import cli
 from cosim.errors import ScenarioError
-from cosim.kinds.curve_entry import simulate, summary_row
 from cosim.limits.criteria import nadal_limit, prudhomme_limit_N, sliding_mean
 from cosim.load import load_scenario
 from cosim.results.series import case_columns
+from cosim.runs.track_run import simulate, summary_row
 from vehicle.params import ContactParams
 
 from helpers import ROOT, SCENARIOS, write_scenario

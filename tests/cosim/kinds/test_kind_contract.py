@@ -111,8 +111,8 @@ class BrakingKind(CarKind):
 
     def run(self, scenario, progress):
         from cosim.engine.cases import simulate_cases
-        ds, diagnoses = simulate_cases(scenario, scenario.braking.valve_settings, self.make_car,
-                                       scenario.braking.duration_s, progress, self.outputs)
+        ds, diagnoses = simulate_cases(scenario, scenario.experiment.valve_settings, self.make_car,
+                                       scenario.experiment.duration_s, progress, self.outputs)
         rows = [{"valves": bool(ds["valves"].values[j]), "k_W_per_K": float(ds["k_W_per_K"].values[j]),
                  "roll_max_rad": float(np.abs(ds["roll_rad"].values[:, j]).max())} for j in range(ds.sizes["case"])]
         # the rows, series and diagnoses: the runner builds the Outcome (totals, checkable metrics)

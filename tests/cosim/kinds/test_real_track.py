@@ -88,8 +88,8 @@ def test_air_outside_physics_stops_its_case_only():
 
 
 # ---------------------------------------------------------------------------- flexible track
-from cosim.kinds.curve_entry import track_twist_warnings  # noqa: E402
 from cosim.limits.criteria import largest_track_twist  # noqa: E402
+from cosim.runs.track_run import track_twist_warnings  # noqa: E402
 from vehicle.params import VehicleParams as _Params  # noqa: E402
 from vehicle.track import TrackGeometry  # noqa: E402
 
@@ -219,9 +219,9 @@ def test_flexible_track_carries_a_load_by_its_own_stiffness(guidance):
 
 # ---------------------------------------------------------------------------- runs
 from cosim import cli  # noqa: E402
-from cosim.kinds.curve_entry import ramp_roll_rate_step_rad_per_s  # noqa: E402
 from cosim.load import load_scenario  # noqa: E402
 from cosim.runner import run  # noqa: E402
+from cosim.runs.track_run import ramp_roll_rate_step_rad_per_s  # noqa: E402
 
 
 def canted_curve(guidance, cant, *extra):

@@ -200,8 +200,8 @@ def test_the_floor_feels_the_uncompensated_acceleration_in_a_steady_arc(tmp_path
     (three periods of the ~1 Hz sway that moves both sides alike): within 1 % and 0.1 %."""
     import xarray as xr
 
-    from cosim.kinds.curve_entry import simulate
     from cosim.load import load_scenario
+    from cosim.runs.track_run import simulate
 
     from helpers import SCENARIOS
     s = load_scenario(SCENARIOS / "curve_entry_contact.yaml", ["curve.duration_s=9", "curve.valve_settings=[false]",

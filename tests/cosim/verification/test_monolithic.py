@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from cosim.engine.cases import build_cosimulation
-from cosim.kinds import curve_entry as curve
 from cosim.kinds import twist
 from cosim.load import load_scenario
+from cosim.runs import track_run as curve
 from cosim.verification.monolithic import MonolithicCar, run_monolithic
 from vehicle.car import WHEELS
 
