@@ -80,7 +80,7 @@ the hunting frequency is |Im| / (2 pi) of that eigenvalue at the critical speed.
 
 Checks that cannot be faked (tests/independent/test_cooperrider.py): Klingel's kinematic
 wavelength L = 2*pi*sqrt(e*r0/lam) of a free wheelset, the rigid-bogie kinematic wavelength
-L = 2*pi*sqrt(e*r0/lam*(1 + b**2/e**2)) (Wickens 2003, ch. 2), and the Routh-Hurwitz stability
+L = 2*pi*sqrt(e*r0/lam*(1 + (f22/f11)*b**2/e**2)) (Wickens 2003, ch. 2, for f11 = f22), and the Routh-Hurwitz stability
 boundary of a single wheelset on a fixed frame, derived by hand from the two equations above.
 """
 from __future__ import annotations
@@ -249,9 +249,15 @@ def klingel_wavelength(lam: float, e: float, r0: float) -> float:
     return 2 * np.pi * np.sqrt(e * r0 / lam)
 
 
-def rigid_bogie_wavelength(lam: float, e: float, r0: float, b: float) -> float:
-    """Kinematic wavelength of a rigid two-axle bogie, L = 2 pi sqrt(e r0 / lam (1 + b^2/e^2)) (Wickens 2003, ch. 2)."""
-    return 2 * np.pi * np.sqrt(e * r0 / lam * (1 + b ** 2 / e ** 2))
+def rigid_bogie_wavelength(lam: float, e: float, r0: float, b: float, f22_over_f11: float = 1.0) -> float:
+    """Kinematic wavelength of a rigid two-axle bogie in the creep-dominated (massless) limit,
+    L = 2 pi sqrt(e r0 / lam (1 + (f22/f11) b^2/e^2)); with f11 = f22 the textbook form
+    2 pi sqrt(e r0 / lam (1 + b^2/e^2)) (Wickens 2003, ch. 2). Derivation: the lateral creep forces
+    sum to zero, so y' = V psi; the yaw moments -4 f11 e (e psi'/V + lam y/r0) of the longitudinal
+    creep and -4 f22 b^2 psi'/V of the lateral creep at +-b sum to zero, so
+    psi' (f11 e^2 + f22 b^2)/V = -f11 e lam y / r0, hence y'' = -omega^2 y with
+    omega^2 = V^2 lam / (e r0) / (1 + f22 b^2 / (f11 e^2))."""
+    return 2 * np.pi * np.sqrt(e * r0 / lam * (1 + f22_over_f11 * b ** 2 / e ** 2))
 
 
 CONICITIES = (0.05, 0.1, 0.2, 0.3)
