@@ -83,4 +83,4 @@ def run_scenario(scenario: Scenario, out_dir: Path, progress: Progress) -> Outco
 
 def _faults_label(scenario: Scenario) -> str:
     """The scenario's faults in words; empty without faults (or for a rig)."""
-    return getattr(scenario.circuit, "faults_label", lambda: "")()
+    return scenario.circuit.faults_label()

@@ -110,6 +110,10 @@ class RigCircuit:
     def initial_pressures(self, components) -> Dict[str, float]:
         return {n: self.p0_Pa for n, c in components.items() if isinstance(c, (Bellow, Tank))}
 
+    def faults_label(self) -> str:
+        """The faults in words, as a car circuit says them: a rig has none."""
+        return ""
+
 
 def identify_circuit(scenario: Scenario, with_tank: bool = True):
     """(components, initial pressures) of the rig ``pneumorail identify`` drives: with the tank
