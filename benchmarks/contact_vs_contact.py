@@ -227,7 +227,7 @@ def saturated_direction(m):
 
 
 def print_tables(m, h):
-    print("### Manchester A-2.2: geometry (ours: raw table, yaw-free; CONTACT: contact reference point)\n")
+    print("### Manchester A-2.2: geometry (ours: γ and r of the law (table smoothed 0.1 mm), positions of the rigid table; both yaw-free. CONTACT: its contact reference point)\n")
     print("| y [mm] | yaw [mrad] | wheel | γ ours / CONTACT [rad] | r ours / CONTACT [mm] | "
           "on wheel ours / CONTACT [mm] | on rail ours / CONTACT [mm] | Δr = r_L − r_R ours / CONTACT [mm] |")
     print("|---|---|---|---|---|---|---|---|")

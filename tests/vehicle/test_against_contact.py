@@ -128,7 +128,7 @@ def test_saturated_tread_forces_within_the_yardstick(mbench):
 
 def test_flanging_wheel_longitudinal_force_departure_is_pinned(mbench):
     """Flange contact (right wheel, y >= 6.5 mm): outside the yardstick. Measured Y 0.062 and
-    F_x 0.114 mu N off (ours F_x 17-27 % low); pinned at 0.07 / 0.12 mu N. The cause is isolated
+    F_x 0.114 mu N off (ours F_x 14-27 % low); pinned at 0.07 / 0.12 mu N. The cause is isolated
     in the next test."""
     for r in mbench:
         if _region(r) != "flange":
@@ -136,7 +136,7 @@ def test_flanging_wheel_longitudinal_force_departure_is_pinned(mbench):
         c, o = r["contact"], r["same_spin"]
         muN = 0.3 * c["N"]
         assert abs(o["Y"] - c["Y"]) < 0.07 * muN
-        assert 0.07 * muN < c["Fx"] - o["Fx"] < 0.12 * muN  # ours 17-27 % low
+        assert 0.07 * muN < c["Fx"] - o["Fx"] < 0.12 * muN  # ours 14-27 % low
 
 
 def test_saturated_direction_is_the_cause(cmp, mbench):
