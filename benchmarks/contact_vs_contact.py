@@ -227,7 +227,8 @@ def saturated_direction(m):
 
 
 def print_tables(m, h):
-    print("### Manchester A-2.2: geometry (ours: γ and r of the law (table smoothed 0.1 mm), positions of the rigid table; both yaw-free. CONTACT: its contact reference point)\n")
+    print("### Manchester A-2.2: geometry (ours: γ and r of the law (table smoothed 0.1 mm), positions of the "
+          "rigid table; both yaw-free. CONTACT: its contact reference point)\n")
     print("| y [mm] | yaw [mrad] | wheel | γ ours / CONTACT [rad] | r ours / CONTACT [mm] | "
           "on wheel ours / CONTACT [mm] | on rail ours / CONTACT [mm] | Δr = r_L − r_R ours / CONTACT [mm] |")
     print("|---|---|---|---|---|---|---|---|")
@@ -263,7 +264,7 @@ def print_tables(m, h):
         sy_c = L["contact"]["Y"] + R["contact"]["Y"]
         sx_o = L["same_spin"]["X"] + R["same_spin"]["X"]
         sx_c = L["contact"]["X"] + R["contact"]["X"]
-        yq = lambda w: w["Y"] / w["Z"]  # noqa: E731  (R: + when the rail pushes it to the centre)
+        yq = lambda w: w["Y"] / w["Z"]
         print(f"| {L['y_mm']:.1f} | {sy_o / 1e3:.3f} / {sy_f / 1e3:.3f} / {sy_c / 1e3:.3f} | "
               f"{sx_o / 1e3:.3f} / {sx_c / 1e3:.3f} | {yq(R['same_spin']):.3f} / {yq(R['contact']):.3f} | "
               f"{L['law_alone']['Fy'] / 1e3:.3f} / {L['contact']['Fy'] / 1e3:.3f} | "
@@ -274,14 +275,16 @@ def print_tables(m, h):
           "our magnitude along −(ξx, ξy) |")
     print("|---|---|---|---|---|---|---|")
     for r in saturated_direction(m):
-        f = lambda v: f"{v[0] / 1e3:.3f} / {v[1] / 1e3:.3f}"  # noqa: E731
+        f = lambda v: f"{v[0] / 1e3:.3f} / {v[1] / 1e3:.3f}"
         print(f"| {r['y_mm']:.1f} | {r['side']} | {r['slip_fraction']:.2f} | {f(r['contact'])} | "
               f"{f(r['law'])} | {f(r['nospin'])} | {f(r['slipdir'])} |")
-    print("\n### Creep-force curve (CONTACT tractcurv: 1-30 exact theory, 61-90 FASTSIM; ours Kalker linear + SHE on the same ellipse)\n")
+    print("\n### Creep-force curve (CONTACT tractcurv: 1-30 exact theory, 61-90 FASTSIM; "
+          "ours Kalker linear + SHE on the same ellipse)\n")
     t = [r for r in h if r["example"] == "tractcurv" and r["case"] <= 30]
     fs = {r["case"] - 60: r for r in h if r["example"] == "tractcurv" and r["case"] > 60}
     print(f"ellipse a = {t[0]['a_mm']:.3f} mm, b = {t[0]['b_mm']:.3f} mm (a/b 0.5), FN 106.7 kN, μ 0.33\n")
-    print("| ξ | FX/μN CONTACT exact | FX/μN ours | ours − exact [% of μN] | FX/μN CONTACT FASTSIM | FASTSIM − exact [% of μN] | ours linear/μN |")
+    print("| ξ | FX/μN CONTACT exact | FX/μN ours | ours − exact [% of μN] | FX/μN CONTACT FASTSIM | "
+          "FASTSIM − exact [% of μN] | ours linear/μN |")
     print("|---|---|---|---|---|---|---|")
     for r in t:
         muN = r["mu"] * r["FN"]
@@ -289,7 +292,8 @@ def print_tables(m, h):
         print(f"| {r['CKSI']:g} | {-r['FX'] / muN:.4f} | {-r['ours_FX'] / muN:.4f} | "
               f"{100 * (-r['ours_FX'] + r['FX']) / muN:+.1f} | {-f['FX'] / muN:.4f} | "
               f"{100 * (-f['FX'] + r['FX']) / muN:+.1f} | {-r['ours_lin_FX'] / muN:.4f} |")
-    print("\n### Spin (CONTACT fastsim 1: exact theory, 2: FASTSIM; ellipse 8 x 4 mm, FN 82 kN, μ 0.3, η -0.000625, φ 0.625 /m)\n")
+    print("\n### Spin (CONTACT fastsim 1: exact theory, 2: FASTSIM; ellipse 8 x 4 mm, FN 82 kN, μ 0.3, "
+          "η -0.000625, φ 0.625 /m)\n")
     print("| | FY [kN] | MZ [N m] |")
     print("|---|---|---|")
     f = [r for r in h if r["example"] == "fastsim"]
