@@ -11,8 +11,9 @@ from cosim.kinds.curve_entry import KIND as CURVE
 from cosim.load import load_scenario
 from cosim.runs.track_run import car_centre_s_m
 from cosim.runs.track_spec import CurveTest
-from helpers import SCENARIOS
 from vehicle.track import Arc, Straight
+
+from helpers import SCENARIOS
 
 
 @pytest.fixture(scope="module")
