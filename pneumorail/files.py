@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import csv
 import errno
+import hashlib
 import os
 import stat
 from dataclasses import dataclass
@@ -111,10 +112,11 @@ def _size(n: int) -> str:
 
 @dataclass(frozen=True)
 class TextFile:
-    """A text file read by :func:`read_text`: its path and text."""
+    """A text file read by :func:`read_text`: its path, text and the sha256 of its bytes."""
 
     path: Path
     text: str
+    sha256: str = ""
 
     def lines(self) -> List[Tuple[int, str]]:
         """(line number as an editor shows it, line) of every line (module doc)."""
@@ -142,7 +144,7 @@ def read_text(path, what: str, max_bytes: int, within: Optional[Path] = None, wh
         _refuse(error, path, where, f"binary content (NUL bytes; UTF-16?): expected a {what} as UTF-8 text")
     for encoding in encodings:
         try:
-            return TextFile(Path(path), raw.decode(encoding).removeprefix("\ufeff"))
+            return TextFile(Path(path), raw.decode(encoding).removeprefix("\ufeff"), hashlib.sha256(raw).hexdigest())
         except UnicodeDecodeError as exc:
             first = exc
     line = raw[:first.start].count(b"\n") + 1
