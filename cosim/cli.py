@@ -162,6 +162,8 @@ def build_parser() -> argparse.ArgumentParser:
     o = sub.add_parser("report", help="one self-contained HTML report of one or more runs (side by side)")
     o.add_argument("dirs", type=Path, nargs="+", help="output folders of runs, checks or verify")
     o.add_argument("--out", type=Path, default=None, help="the HTML file (default: report.html in the first folder)")
+    o.add_argument("--allow-incomplete", action="store_true",
+                   help="report interrupted or unfinished runs too (their verdict: NOT ASSESSED)")
     c = sub.add_parser("compare", help="overlay the results of several runs")
     c.add_argument("dirs", type=Path, nargs="+", help="output folders of earlier runs")
     c.add_argument("--out", type=Path, default=None,
@@ -195,7 +197,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if args.command == "report":
             from cosim.results.report import write_report
             t0 = time.perf_counter()
-            path = write_report(args.dirs, args.out)
+            path = write_report(args.dirs, args.out, args.allow_incomplete)
             print(f"report in {path} ({time.perf_counter() - t0:.2f} s)")
             return EXIT_OK
         if args.command == "validate":
