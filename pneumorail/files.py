@@ -100,6 +100,8 @@ def read_bytes(path, what: str, max_bytes: int, within: Optional[Path] = None, w
         _refuse(error, path, where, f"{reason}: expected a {what}")
     except ValueError as exc:                                  # e.g. a NUL byte in the path
         _refuse(error, path, where, f"not a usable file name ({exc})")
+    except RuntimeError as exc:                                # Path.resolve: a loop of symbolic links
+        _refuse(error, path, where, f"cannot read it ({exc})")
     if len(raw) > max_bytes:
         _refuse(error, path, where, f"more than {_size(max_bytes)} (it grew while read): a {what} is at most "
                                     f"{_size(max_bytes)}")

@@ -22,7 +22,7 @@ from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 from cosim.errors import ScenarioError
 from cosim.limits.validity import FLAGS
 from cosim.results.io import atomic_write, read_rows
-from cosim.results.outdir import INCOMPLETE, LOCK
+from cosim.results.outdir import INCOMPLETE, LOCK, holder
 from cosim.results.overlay import folder_json, incomplete, run_info
 from cosim.results.verdict import (
     CHECK_STATUS,
@@ -121,8 +121,9 @@ def read_run(path: Path, allow_incomplete: bool = False) -> RunFolder:
         verify, path = folder_json(path, "verify.json"), path / "level_0"
     elif path.name.startswith("level_") and (path.parent / "verify.json").exists():
         verify = folder_json(path.parent, "verify.json")
-    if (path / LOCK).exists() and not allow_incomplete:
-        raise ScenarioError(path, [LOCK], "a run is writing into this folder now: report it when it has finished")
+    if holder(path) and not allow_incomplete:
+        raise ScenarioError(path, [LOCK], f"a run (process {holder(path)}) is writing into this folder now: report it "
+                                          f"when it has finished")
     info = run_info(path)
     why = incomplete(path, info)
     if why and not allow_incomplete:

@@ -47,6 +47,11 @@ def test_links_may_not_leave_the_folder_read(tmp_path):
         read_text(folder / "out.txt", "table", 1000, within=folder)
     assert read_text(folder / "in.txt", "table", 1000, within=folder).text == "mine"
     assert read_text(folder / "out.txt", "table", 1000).text == "secret"     # a file the user named: followed
+    (folder / "a").symlink_to(folder / "b")
+    (folder / "b").symlink_to(folder / "a")
+    for within in (None, folder):
+        with pytest.raises(InputError, match="symbolic links|Symlink loop"):
+            read_text(folder / "a", "table", 1000, within=within)
 
 
 @pytest.mark.parametrize("raw, words", [(b"a\0b", "binary"), ("t;\u00e9\n".encode("latin-1"), "not UTF-8"),

@@ -490,3 +490,11 @@ def test_a_sweep_folder_points_at_its_cases(tmp_path, capsys):
     case = _folder(sweep / "cases", "abc123")
     err = _refused(capsys, sweep, names=(sweep,))
     assert "cases" in err and str(case) in err
+
+
+def test_a_lock_left_by_a_process_that_is_gone_does_not_block_the_report(tmp_path):
+    gone = subprocess.Popen(["true"])
+    gone.wait()
+    folder = _folder(tmp_path, "run")
+    (folder / ".pneumorail.lock").write_text(str(gone.pid))
+    assert cli.main(["report", str(folder), "--out", str(tmp_path / "r.html")]) == 0
