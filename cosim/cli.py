@@ -153,7 +153,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the keys to fit (default k_W_per_K; others: e.g. circuit.pipe.zeta)")
     i.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scenario value (repeatable)")
-    i.add_argument("--out", type=Path, default=None, help="output folder (default: beside the data, identify_<its name>)")
+    i.add_argument("--out", type=Path, default=None, help="output folder (default: results/identify_<the data's name>, as run)")
     i.add_argument("--plan", action="store_true", help="instead of fitting: which sine frequency identifies k best")
     i.add_argument("--k", type=float, default=10.0, help="--plan: the nominal k [W/K] (default 10)")
     i.add_argument("--jobs", type=int, default=2, help="processes: a stiffness table's frequencies, the profiles of "
@@ -162,6 +162,8 @@ def build_parser() -> argparse.ArgumentParser:
     o = sub.add_parser("report", help="one self-contained HTML report of one or more runs (side by side)")
     o.add_argument("dirs", type=Path, nargs="+", help="output folders of runs, checks or verify")
     o.add_argument("--out", type=Path, default=None, help="the HTML file (default: report.html in the first folder)")
+    o.add_argument("--allow-incomplete", action="store_true",
+                   help="report interrupted or unfinished runs too (their verdict: NOT ASSESSED)")
     c = sub.add_parser("compare", help="overlay the results of several runs")
     c.add_argument("dirs", type=Path, nargs="+", help="output folders of earlier runs")
     c.add_argument("--out", type=Path, default=None,
@@ -195,7 +197,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if args.command == "report":
             from cosim.results.report import write_report
             t0 = time.perf_counter()
-            path = write_report(args.dirs, args.out)
+            path = write_report(args.dirs, args.out, args.allow_incomplete)
             print(f"report in {path} ({time.perf_counter() - t0:.2f} s)")
             return EXIT_OK
         if args.command == "validate":
@@ -398,8 +400,10 @@ def _verify(args) -> int:
 
 def _comfort(args) -> int:
     from cosim.results.comfort_files import comfort_of_file
+    from cosim.results.outdir import FolderLock
     out = args.out or args.record.resolve().parent / f"comfort_{args.record.stem}"
-    result = comfort_of_file(args.record, out, args.point)
+    with FolderLock(out, "comfort"):                 # an --out that cannot be a folder: exit 2 first
+        result = comfort_of_file(args.record, out, args.point)
     for message in result.warnings:
         print(f"warning: {message}", file=sys.stderr)
     n_mv = "—" if result.N_MV is None else f"{result.N_MV:.3f} ({result.scale})"
@@ -412,6 +416,7 @@ def _comfort(args) -> int:
 def _identify(args) -> int:
     from cosim.identify.run import identify, parse_keys, plan, report, write
     from cosim.identify.synthetic import NOISE
+    from cosim.results.outdir import FolderLock
     if args.plan:
         rows = plan(args.scenario, args.k, NOISE, args.overrides)
         valid = [r for r in rows if r["valid"]]
@@ -433,12 +438,22 @@ def _identify(args) -> int:
     if len(keys) > 1:
         from cosim.sweep.executors import make_executor
         executor = make_executor(args.jobs, args.dask)
-    model, result = identify(args.scenario, args.data, keys, args.overrides, executor, args.jobs)
-    out = args.out or args.data.resolve().parent / f"identify_{args.data.stem}"
-    write(model, result, out)
+    out = _identify_out(args, keys)
+    with FolderLock(out, "identification"):      # refused (exit 2) before anything is fitted
+        model, result = identify(args.scenario, args.data, keys, args.overrides, executor, args.jobs)
+        write(model, result, out)
     print(report(result))
     print(f"results in {out}/")
     return EXIT_OK
+
+
+def _identify_out(args, keys: Sequence[str]) -> Path:
+    """``--out``, or as ``run``: ``results/identify_<the data's name>``, never beside the data (which
+    may be in the source tree); a fit of other keys or with ``--set`` gets a hash suffix."""
+    from cosim.identify.fit import K_KEY
+    from cosim.results.outdir import default_folder
+    fitted = [] if list(keys) == [K_KEY] else [f"--fit={','.join(keys)}"]
+    return args.out or default_folder(f"identify_{args.data.stem}", [*args.overrides, *fitted])
 
 
 def _run(args) -> int:

@@ -12,31 +12,12 @@ that cannot be assembled), ``pneumatics.circuit.CircuitDiverged``, ``vehicle.err
 """
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Sequence, Union
-
-from pneumorail.errors import PneumorailError
+from pneumorail.errors import InputError, PneumorailError
 
 
-class ScenarioError(PneumorailError, ValueError):
-    """Bad input: which file, which key path, what was expected."""
-
-    def __init__(self, file: Union[str, Path, None], path: Sequence[str], message: str):
-        self.file = str(file) if file else "<scenario>"
-        self.path = ".".join(str(p) for p in path) or "(top level)"
-        self.reason = message
-        super().__init__(f"{self.file}: {self.path}: {message}")
-
-    def __reduce__(self):
-        """Picklable (an error raised in a worker process reaches the user unchanged)."""
-        return _scenario_error, (self.file, self.path, self.reason)
-
-
-def _scenario_error(file: str, path: str, reason: str) -> "ScenarioError":
-    error = ScenarioError(file, [], reason)
-    error.path = path
-    error.args = (f"{error.file}: {path}: {reason}",)
-    return error
+class ScenarioError(InputError):
+    """Bad input: which file, which key path, what was expected (:class:`pneumorail.errors.InputError`,
+    the application's own)."""
 
 
 class ExecutorUnavailable(PneumorailError, RuntimeError):

@@ -5,6 +5,11 @@ The signals set a flag instead of raising: the co-simulation loops check it ever
 far, a summary, ``run.json`` with ``"status": "interrupted"``); the command then exits 130
 (SIGINT) or 143 (SIGTERM). The main process forwards the signal to its worker processes, which
 install the same handler (:func:`install_in_worker`). A second signal stops at once.
+
+Helper pools (a sweep's workers, the figures drawn in parallel, an identification's model
+evaluations) leave Ctrl-C to the parent instead (:func:`ignore_in_worker`): the parent stops
+them, and no worker prints a ``KeyboardInterrupt`` traceback of its own into the command's
+clean "interrupted" message.
 """
 from __future__ import annotations
 
@@ -43,6 +48,11 @@ def _handler(signum, frame) -> None:
             os.kill(child.pid, signum)
         except ProcessLookupError:
             pass
+
+
+def ignore_in_worker() -> None:
+    """Initializer of helper pool processes: SIGINT is left to the parent (module doc)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def install_in_worker() -> None:

@@ -124,6 +124,8 @@ from typing import NamedTuple, Sequence, Union
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
+from pneumorail.files import TABLE_MAX_BYTES, read_text
+
 from .wheelrail.compiled import kernel
 
 __all__ = [
@@ -422,14 +424,9 @@ class TrackIrregularity:
         if not (math.isfinite(max_abs_m) and max_abs_m > 0.0):
             raise ValueError(f"max_abs_m must be a finite number > 0 (m), got {max_abs_m!r}")
         where = str(path)
-        try:
-            with path.open("r", newline="", encoding="utf-8-sig") as fh:
-                lines = list(enumerate(fh.read().splitlines(), start=1))
-        except UnicodeDecodeError as exc:
-            # a binary file, or text in another encoding (UTF-16 from a spreadsheet): say which file
-            raise ValueError(f"{where}: not a UTF-8 text CSV (byte {exc.start} cannot be decoded: {exc.reason}); "
-                             f"save it as UTF-8 (or ASCII) text") from None
-        rows = [(i, line) for i, line in lines if line.strip() and not line.lstrip().startswith("#")]
+        # the one reader: a regular file of bounded size, UTF-8 (a binary file or UTF-16 from a
+        # spreadsheet is refused naming the file), line numbers as the editor shows them
+        rows = read_text(path, "track irregularity (CSV)", TABLE_MAX_BYTES).data_lines()
         if not rows:
             raise ValueError(f"{where}: empty file; expected a header line "
                              f"'{','.join(COLUMNS)}' (s_m required) and data lines")

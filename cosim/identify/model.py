@@ -24,6 +24,7 @@ from scipy.interpolate import make_interp_spline
 
 from cosim.errors import ScenarioError
 from cosim.identify.data import Measurements, table_channels
+from cosim.interrupts import ignore_in_worker
 from cosim.load import load_scenario
 from pneumatics.circuit import Circuit
 from pneumatics.integrate import advance, stable_step_s
@@ -137,7 +138,7 @@ class RigModel:
             points = dynamic_stiffness_sweep(comps, ks, f, amplitude_m, p0)
         else:
             if self._pool is None:
-                self._pool = ProcessPoolExecutor(len(shares))
+                self._pool = ProcessPoolExecutor(len(shares), initializer=ignore_in_worker)   # Ctrl-C: the parent's
             tasks = [self._pool.submit(dynamic_stiffness_sweep, comps, ks, share, amplitude_m, p0) for share in shares]
             points = [p for task in tasks for p in task.result()]
         at = {(p.k_W_per_K, p.frequency_Hz): p for p in points}

@@ -21,7 +21,9 @@ from cosim.identify.data import Measurements, read_measurements
 from cosim.identify.fit import K_KEY, Identification, fit_joint, fit_k, searched
 from cosim.identify.model import RigModel
 from cosim.results.plots import Curve, Panel, save_panels
+from cosim.scenario.yaml_input import MAX_BYTES
 from pneumatics.rig import run_time_series, sine_motion
+from pneumorail.files import read_bytes
 
 #: what each channel is called on a plot, with its unit and the scale it is drawn in
 LABELS = {"F_bellow_N": ("bellow force F [kN]", 1e-3), "p_bellow_Pa": ("bellow pressure [bar abs]", 1e-5),
@@ -54,7 +56,8 @@ def identify(scenario_file: Path, data_file: Path, keys: Sequence[str], override
 
 
 def _sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    """The scenario's sha256, read again by the one reader (it may have changed since)."""
+    return hashlib.sha256(read_bytes(path, "scenario file", MAX_BYTES, error=ScenarioError)).hexdigest()
 
 
 def _number(v: float):
@@ -67,7 +70,7 @@ def write(model: RigModel, result: Identification, out: Path) -> List[Path]:
     data = model.data
     summary = {
         "scenario_file": str(model.scenario_file), "scenario_sha256": _sha256(model.scenario_file),
-        "data_file": str(data.file), "data_sha256": _sha256(data.file), "overrides": list(model.overrides),
+        "data_file": str(data.file), "data_sha256": data.sha256, "overrides": list(model.overrides),
         "estimates": [{"key": e.key, "value": _number(e.value), "standard_error": _number(e.se),
                        "ci95_low": _number(e.ci_low), "ci95_high": _number(e.ci_high), "limit": e.limit,
                        "identifiable": e.identifiable} for e in result.estimates],
@@ -143,6 +146,10 @@ def plan(scenario_file: Path, k_W_per_K: float, noise: Dict[str, float], overrid
     compares is where the thermal time constant meets the excitation."""
     from cosim.kinds import KINDS
     from cosim.load import load_scenario
+    if not (math.isfinite(k_W_per_K) and k_W_per_K > 0):
+        # the standard error is taken with respect to log k at the nominal k: 0, inf, nan or a
+        # negative k has no logarithm (inf also makes the rig isothermal: nothing to identify)
+        raise ScenarioError(scenario_file, ["--k"], f"the nominal k must be a finite number > 0 W/K, got {k_W_per_K:g}")
     s = load_scenario(scenario_file, list(overrides))
     if KINDS[s.kind].identify != "time":
         able = ", ".join(k.name for k in KINDS.values() if k.identify == "time")

@@ -138,8 +138,19 @@ def parse(data, vehicle: VehicleParams, path: Path) -> StabilityTest:
         file = Path(path).parent / test.wheel_profile
         if not file.is_file():
             raise ScenarioError(path, ["stability", "wheel_profile"], f"the wheel profile {str(file)!r} does not exist")
+        _read_wheel_profile(file, path)
         test = dataclasses.replace(test, wheel_profile=str(file))
     return test
+
+
+def _read_wheel_profile(file: Path, path: Path) -> None:
+    """Read the wheel profile now, as the run will (garbage, a profile in metres or a rail profile
+    refused at load, not after the run started), the error at its key."""
+    from vehicle.wheelrail.profiles import read_profile
+    try:
+        read_profile(file, "wheel")
+    except ValueError as exc:                      # InputError among them: the profile file named
+        raise ScenarioError(path, ["stability", "wheel_profile"], f"cannot use the wheel profile: {exc}") from None
 
 
 def _run_durations_s(test: StabilityTest) -> List[float]:

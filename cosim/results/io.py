@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -15,7 +16,9 @@ from typing import Dict, Iterable, List, Mapping, Sequence
 
 import numpy as np
 
+from cosim.errors import ScenarioError
 from cosim.scenario.schema import k_label
+from pneumorail.files import RUN_FILE_MAX_BYTES, read_text
 
 
 @contextmanager
@@ -73,9 +76,12 @@ def write_rows(path: Path, rows: Iterable[Mapping[str, object]]) -> None:
         writer.writerows(rows)
 
 
-def read_rows(path: Path):
-    with Path(path).open() as fh:
-        return list(csv.DictReader(fh))
+def read_rows(path: Path) -> List[Dict[str, str]]:
+    """The rows of a CSV table of an output folder (summary.csv ...), read by the one reader: a
+    regular file inside its folder, at most :data:`~pneumorail.files.RUN_FILE_MAX_BYTES`, UTF-8."""
+    path = Path(path)
+    text = read_text(path, "pneumorail table (CSV)", RUN_FILE_MAX_BYTES, within=path.parent, error=ScenarioError)
+    return list(csv.DictReader(io.StringIO(text.text, newline="")))
 
 
 def cell(v):

@@ -43,6 +43,16 @@ def _alive(pid: int) -> bool:
     return True
 
 
+def holder(folder: Path) -> int:
+    """The process id of the live process holding ``folder`` (its lock file), 0 when none does (no
+    lock, or one left by a process that is gone)."""
+    try:
+        pid = int((Path(folder) / LOCK).read_text().strip() or 0)
+    except (OSError, ValueError):
+        return 0
+    return pid if pid and _alive(pid) else 0
+
+
 class FolderLock:
     """A folder held by one process while it writes there: created if need be, then a lock file
     with the holder's process id, made exclusively; a lock whose process is gone is taken over.
@@ -69,11 +79,8 @@ class FolderLock:
                     fh.write(str(os.getpid()))
                 return p
             except FileExistsError:
-                try:
-                    pid = int(lock.read_text().strip() or 0)
-                except (OSError, ValueError):
-                    pid = 0
-                if pid and pid != os.getpid() and _alive(pid):
+                pid = holder(p)
+                if pid and pid != os.getpid():
                     self._refuse(f"another {self.what} (process {pid}) is writing into this folder")
                 lock.unlink(missing_ok=True)            # left by a process that is gone
             except OSError as exc:

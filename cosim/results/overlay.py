@@ -12,6 +12,7 @@ import numpy as np
 
 from cosim.errors import ScenarioError
 from cosim.results.io import read_rows
+from pneumorail.files import RUN_FILE_MAX_BYTES, SERIES_MAX_BYTES, read_text
 from vehicle.params import WHEELS
 
 
@@ -25,17 +26,38 @@ class Selection:
     t_s: Optional[Tuple[float, float]] = None
 
 
-def run_info(run_dir: Path) -> dict:
-    """The ``run.json`` of an output folder (an error naming it if it is not one, or if the file is
-    not valid JSON, e.g. cut short by a full disk)."""
-    info_path = run_dir / "run.json"
-    if not info_path.exists():
-        raise ScenarioError(run_dir, ["run.json"], "not a pneumorail output folder (no run.json)")
+def folder_json(run_dir: Path, name: str) -> Optional[dict]:
+    """The JSON object ``name`` of an output folder (None when absent), read by the one reader:
+    a regular file inside the folder (no link out of it), at most
+    :data:`~pneumorail.files.RUN_FILE_MAX_BYTES`, UTF-8; an error naming it if it is not a JSON
+    object (e.g. cut short by a full disk, or edited into a list)."""
+    path = Path(run_dir) / name
+    if not path.exists() and not path.is_symlink():
+        return None
+    text = read_text(path, f"pneumorail {name}", RUN_FILE_MAX_BYTES, within=run_dir, error=ScenarioError).text
     try:
-        return json.loads(info_path.read_text())
-    except (ValueError, OSError) as exc:
-        raise ScenarioError(info_path, [], f"cannot be read as a run's description ({exc}); the run did not finish "
-                                           f"writing it") from None
+        data = json.loads(text)
+    except ValueError as exc:
+        raise ScenarioError(path, [], f"not valid JSON ({exc}); the run did not finish writing it, or it was "
+                                      f"edited") from None
+    if not isinstance(data, dict):
+        raise ScenarioError(path, [], f"expected a JSON object {{...}} as pneumorail writes it, got "
+                                      f"{type(data).__name__ if data is not None else 'null'}")
+    return data
+
+
+def run_info(run_dir: Path) -> dict:
+    """The ``run.json`` of an output folder (:func:`folder_json`; an error naming the folder if it
+    is not one, pointing at a sweep's cases in a sweep's folder)."""
+    run_dir = Path(run_dir)
+    if not (run_dir / "run.json").exists() and not (run_dir / "run.json").is_symlink():
+        if (run_dir / "sweep.csv").exists() or (run_dir / "cases").is_dir():
+            cases = sorted(p.name for p in (run_dir / "cases").glob("*") if (p / "run.json").exists())
+            example = f", e.g. {run_dir / 'cases' / cases[0]}" if cases else ""
+            raise ScenarioError(run_dir, ["run.json"], f"a sweep's folder (sweep.csv, cases/): name one case's "
+                                                       f"folder, {run_dir / 'cases'}/<case>/{example}")
+        raise ScenarioError(run_dir, ["run.json"], "not a pneumorail output folder (no run.json)")
+    return folder_json(run_dir, "run.json")
 
 
 def incomplete(run_dir: Path, info: dict) -> str:
@@ -60,7 +82,8 @@ def case_series(run_dir: Path, prefix: str, select: Selection) -> Iterator[Tuple
         case = path.stem[len(prefix):]
         if select.k is not None and "k=" in case and _case_k(case) not in select.k:
             continue
-        data = np.genfromtxt(path, delimiter=",", names=True)
+        text = read_text(path, "time series (CSV)", SERIES_MAX_BYTES, within=run_dir, error=ScenarioError).text
+        data = np.genfromtxt(text.splitlines(), delimiter=",", names=True)
         if select.t_s is not None:
             data = data[(data["t_s"] >= select.t_s[0]) & (data["t_s"] <= select.t_s[1])]
         yield case_label(case), data

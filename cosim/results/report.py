@@ -22,8 +22,10 @@ from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 from cosim.errors import ScenarioError
 from cosim.limits.validity import FLAGS
 from cosim.results.io import atomic_write, read_rows
-from cosim.results.overlay import run_info
+from cosim.results.outdir import INCOMPLETE, LOCK, holder
+from cosim.results.overlay import folder_json, incomplete, run_info
 from cosim.results.verdict import (
+    CHECK_STATUS,
     FAIL,
     NOT_ASSESSED,
     PASS,
@@ -36,6 +38,7 @@ from cosim.results.verdict import (
     verdict,
     worst_of,
 )
+from pneumorail.files import FIGURE_MAX_BYTES, read_bytes
 
 #: the summary columns always shown (those present): validity, faults, the EN 14363 criteria failed
 ALWAYS = ("validity", "faults", "en14363_failed")
@@ -101,27 +104,73 @@ class RunFolder:
         return verdict([i for table in self.items.values() for i in table])
 
 
-def read_run(path: Path) -> RunFolder:
+#: the columns of assessment_limits.csv the report reads (:func:`cosim.results.verdict.assessment_items`)
+ASSESSMENT_COLUMNS = ("quantity", "value", "limit", "unit", "status", "kind", "source", "valves", "k_W_per_K", "zone",
+                      "at")
+
+
+def read_run(path: Path, allow_incomplete: bool = False) -> RunFolder:
     """An output folder (of ``run``, ``check`` or ``verify``: a verify folder is reported by its
-    level-0 run with its verify.json)."""
+    level-0 run with its verify.json), every file read by the one reader (inside the folder, a
+    size limit, UTF-8: :mod:`pneumorail.files`) and checked for the shape pneumorail writes. A
+    run still being written or interrupted (an INCOMPLETE marker, a lock, run.json's status) is
+    refused unless ``allow_incomplete`` (its verdict is then NOT ASSESSED)."""
     path = label = Path(path)
     verify = None
     if (path / "verify.json").exists() and (path / "level_0" / "run.json").exists():
-        verify, path = _json(path / "verify.json"), path / "level_0"
+        verify, path = folder_json(path, "verify.json"), path / "level_0"
     elif path.name.startswith("level_") and (path.parent / "verify.json").exists():
-        verify = _json(path.parent / "verify.json")
+        verify = folder_json(path.parent, "verify.json")
+    if holder(path) and not allow_incomplete:
+        raise ScenarioError(path, [LOCK], f"a run (process {holder(path)}) is writing into this folder now: report it "
+                                          f"when it has finished")
     info = run_info(path)
-    rows = read_rows(path / "summary.csv") if (path / "summary.csv").exists() else []
-    limits = read_rows(path / "assessment_limits.csv") if (path / "assessment_limits.csv").exists() else []
-    check = _json(path / "check.json") if (path / "check.json").exists() else None
+    why = incomplete(path, info)
+    if why and not allow_incomplete:
+        raise ScenarioError(path, [INCOMPLETE if (path / INCOMPLETE).exists() else "run.json"],
+                            f"not a complete run: {why}; report a finished run, or add --allow-incomplete (its "
+                            f"verdict is then NOT ASSESSED)")
+    rows = _folder_rows(path, "summary.csv")
+    limits = _folder_rows(path, "assessment_limits.csv", ASSESSMENT_COLUMNS)
+    check = folder_json(path, "check.json")
+    if check is not None:
+        _check_shape(path / "check.json", check)
     return RunFolder(path, info, rows, limits, check, verify, sorted(path.glob("*.png")), label.name)
 
 
-def _json(path: Path) -> dict:
-    try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise ScenarioError(path, [], f"cannot read it ({exc})") from None
+def _folder_rows(path: Path, name: str, needed: Sequence[str] = ()) -> List[Dict[str, str]]:
+    """The rows of the table ``name`` of a folder ([] when absent), each with every column of the
+    header and the ``needed`` ones among them."""
+    file = path / name
+    if not file.exists() and not file.is_symlink():
+        return []
+    rows = read_rows(file)
+    for n, row in enumerate(rows, start=2):
+        if None in row or None in row.values():
+            raise ScenarioError(file, [f"line {n}"], "a row of another length than the header: not the table "
+                                                     "pneumorail writes")
+    missing = [c for c in needed if rows and c not in rows[0]]
+    if missing:
+        raise ScenarioError(file, [missing[0]], f"no such column: not the table pneumorail writes (its columns: "
+                                                f"{', '.join(needed)})")
+    return rows
+
+
+def _check_shape(file: Path, check: Mapping) -> None:
+    """check.json as :meth:`Outcome.verdict` writes it: a list of checks, each a mapping with a
+    name, a status and, with a value, its metric and limit."""
+    checks = check.get("checks", [])
+    if not isinstance(checks, list):
+        raise ScenarioError(file, ["checks"], f"expected a list of checks, got {type(checks).__name__}")
+    for i, c in enumerate(checks):
+        if not isinstance(c, dict):
+            raise ScenarioError(file, [f"checks[{i}]"], f"expected a check (a mapping), got {type(c).__name__}")
+        for key in ("name", "status", *(("metric", "limit") if "value" in c else ())):
+            if key not in c:
+                raise ScenarioError(file, [f"checks[{i}]", key], "missing: not the check.json pneumorail writes")
+        if c["status"] not in CHECK_STATUS:
+            raise ScenarioError(file, [f"checks[{i}]", "status"], f"expected one of {', '.join(CHECK_STATUS)}, "
+                                                                   f"got {c['status']!r}")
 
 
 # ----------------------------------------------------------------------------------- formatting
@@ -552,7 +601,8 @@ def _figures(run: RunFolder) -> str:
     facts = run_facts(run)
     out = []
     for png in run.figures:
-        data = base64.b64encode(png.read_bytes()).decode("ascii")
+        data = base64.b64encode(read_bytes(png, "figure (PNG)", FIGURE_MAX_BYTES, within=run.path,
+                                           error=ScenarioError)).decode("ascii")
         title = " ".join(str(titles.get(png.name, "")).split())
         caption = f"{run.name}" + (f" ({facts})" if facts else "") + f": {title or png.stem} [{png.name}]"
         out.append(f"<figure><img alt='{html.escape(png.stem, quote=True)}' src='data:image/png;base64,{data}'>"
@@ -598,11 +648,20 @@ def render(runs: Sequence[RunFolder]) -> str:
             f"<p class='note'>Generated {stamp} from {len(runs)} output folder(s).</p>{body}</body></html>\n")
 
 
-def write_report(run_dirs: Sequence[Path], out_file: Optional[Path] = None) -> Path:
+def write_report(run_dirs: Sequence[Path], out_file: Optional[Path] = None, allow_incomplete: bool = False) -> Path:
     """Write the report of ``run_dirs`` to ``out_file`` (default: ``report.html`` in the first
-    run's folder); returns its path."""
-    runs = [read_run(Path(d)) for d in run_dirs]
+    run's folder); returns its path. Folders are read by :func:`read_run`."""
+    runs = [read_run(Path(d), allow_incomplete) for d in run_dirs]
     out_file = Path(out_file) if out_file else runs[0].path / "report.html"
+    try:
+        page = render(runs)
+    except ScenarioError:
+        raise
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
+        # a value of another type deep in run.json (the folder's files were edited, or written
+        # by another version): the folders are named, not a traceback
+        raise ScenarioError(", ".join(str(r.path) for r in runs), [],
+                            f"the files do not have the shape pneumorail writes ({type(exc).__name__}: {exc})") from None
     with atomic_write(out_file) as fh:
-        fh.write(render(runs))
+        fh.write(page)
     return out_file

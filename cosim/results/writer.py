@@ -13,6 +13,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import List, Sequence
 
+from cosim.interrupts import ignore_in_worker
 from cosim.results.io import atomic_write, jsonable, write_columns, write_rows, write_run_json
 from cosim.results.outcome import Outcome
 from cosim.results.plots import Figure
@@ -141,5 +142,5 @@ def save_figures(out: Path, figures: Sequence[Figure], jobs: int = 1) -> None:
         for figure in figures:
             figure.save(out)
         return
-    with ProcessPoolExecutor(workers) as pool:
+    with ProcessPoolExecutor(workers, initializer=ignore_in_worker) as pool:      # Ctrl-C: the parent's
         list(pool.map(Figure.save, figures, [out] * len(figures)))

@@ -4,7 +4,8 @@ A scenario is a few kilobytes of hand-written YAML. Anything else is refused, ea
 fraction of a second and with a :class:`~cosim.scenario.schema.ScenarioError` naming the file (and, where
 there is one, the key path):
 
-* files over :data:`MAX_BYTES`, binary or non-UTF-8 content;
+* files over :data:`MAX_BYTES`, not regular files, binary or non-UTF-8 content (the one file
+  reader, :mod:`pneumorail.files`);
 * duplicate keys in a mapping (PyYAML silently keeps the last one), reported at their key path;
 * nesting deeper than :data:`MAX_DEPTH`: refused by the scanner itself, at the bracket or
   indentation that goes too deep (PyYAML's scanner slows down quadratically with nested flow
@@ -23,6 +24,7 @@ from typing import Any, List, Sequence, Tuple
 import yaml
 
 from cosim.errors import ScenarioError
+from pneumorail.files import read_text
 
 #: Largest scenario or parameter file read [bytes]; the shipped ones are 1-4 kB.
 MAX_BYTES = 256 * 1024
@@ -151,34 +153,7 @@ def parse_yaml(text: str, file, where: Sequence[str] = ()) -> Any:
 
 
 def read_yaml(path: Path) -> Tuple[Any, str]:
-    """(data, text) of a YAML file, refusing what cannot be a scenario (module doc)."""
-    path = Path(path)
-    try:
-        if not path.exists():
-            raise ScenarioError(path, [], "no such file")
-        if path.is_dir():
-            raise ScenarioError(path, [], "this is a folder, not a scenario file")
-        if not path.is_file():                     # a FIFO would block, a device never end
-            raise ScenarioError(path, [], "not a regular file")
-        size = path.stat().st_size
-        if size > MAX_BYTES:
-            raise ScenarioError(path, [], f"the file is {size / 1024:.0f} kB; a scenario is at most "
-                                          f"{MAX_BYTES // 1024} kB of YAML")
-        with path.open("rb") as f:
-            raw = f.read(MAX_BYTES + 1)            # the size may have changed since
-        if len(raw) > MAX_BYTES:
-            raise ScenarioError(path, [], f"more than {MAX_BYTES // 1024} kB: a scenario is at most "
-                                          f"{MAX_BYTES // 1024} kB of YAML")
-    except ScenarioError:
-        raise
-    except OSError as exc:
-        raise ScenarioError(path, [], f"cannot read the file ({exc.strerror or exc})") from None
-    except ValueError as exc:                      # e.g. an embedded NUL byte in the path
-        raise ScenarioError(path, [], f"not a usable file name ({exc})") from None
-    if b"\0" in raw:
-        raise ScenarioError(path, [], "binary content (NUL bytes): expected a YAML text file")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ScenarioError(path, [], f"not UTF-8 text (byte {exc.start}): expected a YAML text file") from None
-    return parse_yaml(text, path), text
+    """(data, text) of a YAML file, refusing what cannot be a scenario (module doc); the file is
+    read by the project's one reader (:func:`pneumorail.files.read_text`)."""
+    text = read_text(path, "scenario or parameter file (YAML)", MAX_BYTES, error=ScenarioError).text
+    return parse_yaml(text, Path(path)), text

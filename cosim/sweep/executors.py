@@ -16,14 +16,16 @@ from __future__ import annotations
 import multiprocessing
 import signal
 import sys
+import threading
 import uuid
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Iterator, Optional, Sequence, Tuple
+from typing import Any, Callable, Iterable, Iterator, List, Optional, Sequence, Tuple
 
 from cosim.errors import ExecutorUnavailable
+from cosim.interrupts import ignore_in_worker
 
 Task = Tuple[str, Sequence[Any]]
 
@@ -51,19 +53,31 @@ class Serial:
         self.description = "in this process"
 
     def run(self, fn: Callable, tasks: Iterable[Task]) -> Iterator[Completed]:
-        for key, args in tasks:
-            self.running = 1
-            try:
-                done = Completed(key, fn(*args))
-            except Exception as exc:                   # noqa: BLE001 -- reported, the sweep goes on
-                done = Completed(key, None, message(exc))
-            self.running = 0
-            yield done
+        """Each task in turn; Ctrl-C raises KeyboardInterrupt here even when it arrived inside
+        compiled code that wraps it into an error of its own (exudyn's user functions turn it into
+        a ModelError, and the case reported it as failed with its traceback in the sweep's
+        report): a case during which Ctrl-C came stays pending and runs again on resuming."""
+        received: List[int] = []
 
-
-def _ignore_sigint() -> None:
-    """Pool workers leave Ctrl-C to the parent, which stops them (no traceback per worker)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+        def handler(signum, frame):
+            received.append(signum)
+            raise KeyboardInterrupt
+        main = threading.current_thread() is threading.main_thread()    # signals reach the main thread only
+        previous = signal.signal(signal.SIGINT, handler) if main else None
+        try:
+            for key, args in tasks:
+                self.running = 1
+                try:
+                    done = Completed(key, fn(*args))
+                except Exception as exc:                   # noqa: BLE001 -- reported, the sweep goes on
+                    done = Completed(key, None, message(exc))
+                if received:                               # the case ended by the interrupt: pending
+                    raise KeyboardInterrupt
+                self.running = 0
+                yield done
+        finally:
+            if main:
+                signal.signal(signal.SIGINT, previous)
 
 
 def _context():
@@ -88,7 +102,7 @@ class Pool:
         suspects = set()                       # in flight when a worker died: rerun alone
         while queue:
             pool = ProcessPoolExecutor(max_workers=min(self.jobs, len(queue)), mp_context=_context(),
-                                       initializer=_ignore_sigint)
+                                       initializer=ignore_in_worker)
             inflight = {}
             clean = False
             try:

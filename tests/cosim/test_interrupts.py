@@ -46,3 +46,41 @@ def test_a_signal_stops_the_run_keeps_its_results_and_leaves_no_worker(sig, code
     time.sleep(0.5)
     alive = [p for p in workers if subprocess.run(["kill", "-0", str(p)], capture_output=True).returncode == 0]
     assert alive == []                       # no orphan worker
+
+
+def test_every_helper_pool_leaves_ctrl_c_to_its_parent():
+    # a pool worker without a SIGINT disposition of its own prints a "Process ForkProcess-N:
+    # Traceback ... KeyboardInterrupt" into the command's clean "interrupted" message: every
+    # ProcessPoolExecutor of the application names an initializer (ignore_in_worker, or the
+    # run's install_in_worker)
+    import ast
+
+    from helpers import ROOT
+    bare = []
+    for path in (ROOT / "cosim").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", "")) == "ProcessPoolExecutor"
+                    and not any(k.arg == "initializer" for k in node.keywords)):
+                bare.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert not bare, bare
+
+
+def test_ctrl_c_inside_compiled_code_interrupts_a_serial_sweep_instead_of_failing_the_case():
+    # exudyn turns a KeyboardInterrupt raised in a user function into a ModelError; a sweep in
+    # one process then reported the case failed, with the traceback, and exited 1
+    import os
+
+    from cosim.sweep.executors import Serial
+
+    def case(n):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1)
+        except KeyboardInterrupt:
+            raise RuntimeError("ModelError: KeyboardInterrupt in a user function") from None
+        return n
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        list(Serial().run(case, [("a", (1,)), ("b", (2,))]))
+    assert signal.getsignal(signal.SIGINT) is before                    # restored
+    assert [d.result for d in Serial().run(lambda n: n, [("a", (1,))])] == [1]

@@ -368,3 +368,49 @@ def test_subpackage_is_pure_numpy_scipy():
             "'cosim')]; print(bad); sys.exit(1 if bad else 0)")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+# ------------------------------------------------------------- hostile profile files (issue 39)
+_S1002 = __import__("pathlib").Path(__file__).parents[2] / "vehicle" / "wheelrail" / "data" / "MBench_S1002_v3.prw"
+
+
+def _table(tmp_path, scale=1.0, name="wheel.txt"):
+    wheel = read_profile(_S1002)
+    path = tmp_path / name
+    path.write_text("\n".join(f"{float(y) * scale!r} {float(z) * scale!r}" for y, z in zip(wheel.y_mm, wheel.z_mm)))
+    return path
+
+
+def test_a_profile_in_metres_is_refused_naming_metres(tmp_path):
+    with pytest.raises(ValueError, match="metres") as err:
+        read_profile(_table(tmp_path, 1e-3), "wheel")
+    assert "wheel.txt" in str(err.value)
+    assert read_profile(_table(tmp_path), "wheel").y_mm.size > 4        # the same in mm is read
+
+
+@pytest.mark.parametrize("content, words", [(b"a b\nc d\n", "not a table"), (b"1\n2\n3\n4\n", "1 column"),
+                                             (bytes(range(256)), "binary")])
+def test_garbage_profiles_are_refused_naming_the_file(tmp_path, content, words):
+    path = tmp_path / "wheel.txt"
+    path.write_bytes(content)
+    with pytest.raises(ValueError, match=words) as err:
+        read_profile(path, "wheel")
+    assert str(path) in str(err.value)
+
+
+def test_a_profile_that_is_a_device_or_too_large_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="device"):
+        read_profile("/dev/zero", "wheel")
+    big = tmp_path / "big.prw"
+    big.write_bytes(b"! padding\n" * 120_000)
+    with pytest.raises(ValueError, match="at most"):
+        read_profile(big)
+
+
+def test_a_simpack_error_names_the_line_the_editor_shows(tmp_path):
+    text = _S1002.read_text(encoding="latin-1").replace("point.begin", "point.begin\n! a comment\nnot a point", 1)
+    path = tmp_path / "wheel.prw"
+    path.write_text(text, encoding="latin-1")
+    lineno = text.splitlines().index("not a point") + 1
+    with pytest.raises(ValueError, match=f"line {lineno}"):
+        read_profile(path)

@@ -50,6 +50,9 @@ from pathlib import Path
 
 import numpy as np
 
+from pneumorail.errors import InputError
+from pneumorail.files import PROFILE_MAX_BYTES, read_text
+
 __all__ = ["Profile", "read_profile", "read_simpack_profile", "write_simpack_profile"]
 
 
@@ -99,7 +102,9 @@ def read_simpack_profile(path: str | Path) -> Profile:
     options: dict = {}
     raw: list[tuple[float, float]] = []
     section = None
-    for lineno, line in enumerate(path.read_text(encoding="latin-1").splitlines(), start=1):
+    # SIMPACK writes its files from Windows tools: Latin-1 where they are not UTF-8
+    text = read_text(path, "SIMPACK profile", PROFILE_MAX_BYTES, encodings=("utf-8", "latin-1"))
+    for lineno, line in text.lines():
         stripped = line.strip()
         if not stripped or stripped.startswith("!"):
             continue
@@ -116,7 +121,7 @@ def read_simpack_profile(path: str | Path) -> Profile:
         if section == "point":
             nums = re.findall(_NUM, body)
             if len(nums) < 2:
-                raise ValueError(f"{path}:{lineno}: expected 'y z [weight]', got {line!r}")
+                raise InputError(path, [f"line {lineno}"], f"expected 'y z [weight]', got {line!r}")
             raw.append((float(nums[0]), float(nums[1])))
             continue
         if "=" in body and section in ("header", "spline"):
@@ -158,6 +163,7 @@ def read_simpack_profile(path: str | Path) -> Profile:
     to_mm = 1000.0 / unit_per_m
     y, z = y * to_mm, z * to_mm
     y, z = _canonical_order(kind, y, z)
+    _check_length(kind, y, z, str(path))
     _check_orientation(kind, y, z, str(path))
     return Profile(kind=kind, y_mm=y, z_mm=z, source=str(path),
                    comment=str(options.get("comment", "")), raw_yz=raw_arr, options=options)
@@ -169,6 +175,24 @@ def _canonical_order(kind: str, y: np.ndarray, z: np.ndarray):
     if (kind == "rail") != ascending:
         y, z = y[::-1], z[::-1]
     return y, z
+
+
+#: A profile's length along its points [mm]: CONTACT accepts 5-500 mm; the shipped S1002 wheel is
+#: 149 mm, the UIC60 rail 132 mm. A profile written in metres is 1000 times shorter (0.15 "mm").
+PROFILE_LENGTH_MM = (5.0, 500.0)
+
+
+def _check_length(kind: str, y: np.ndarray, z: np.ndarray, name: str):
+    """Refuse a profile whose length is no wheel's or rail's (:data:`PROFILE_LENGTH_MM`), naming
+    the unit it was likely written in."""
+    length = float(np.sum(np.hypot(np.diff(y), np.diff(z))))
+    lo, hi = PROFILE_LENGTH_MM
+    if lo <= length <= hi:
+        return
+    likely = ("the points look like metres: multiply them by 1000 (or set units.len.f = 1 in a SIMPACK file)"
+              if lo <= 1000 * length <= hi else "not a wheel or rail profile in mm")
+    raise InputError(name, [], f"the {kind} profile is {length:.3g} mm long; a wheel or rail profile is "
+                               f"{lo:g}-{hi:g} mm: {likely}")
 
 
 def _check_orientation(kind: str, y: np.ndarray, z: np.ndarray, name: str):
@@ -199,9 +223,17 @@ def read_profile(path: str | Path, kind: str | None = None) -> Profile:
         return prof
     if kind is None:
         raise ValueError(f"{path}: give kind='wheel' or 'rail' for a plain table")
-    data = np.loadtxt(path, comments="#", delimiter=None if path.suffix.lower() != ".csv" else ",",
-                      ndmin=2)
+    text = read_text(path, f"{kind} profile (y z table in mm)", PROFILE_MAX_BYTES)
+    try:
+        data = np.loadtxt(text.text.splitlines(), comments="#",
+                          delimiter=None if path.suffix.lower() != ".csv" else ",", ndmin=2)
+    except ValueError as exc:
+        raise InputError(path, [], f"not a table of 'y z' numbers in mm ({exc})") from None
+    if data.shape[1] < 2 or data.shape[0] < 4 or not np.all(np.isfinite(data[:, :2])):
+        raise InputError(path, [], f"expected at least 4 finite 'y z' points in mm, got {data.shape[0]} rows of "
+                                   f"{data.shape[1]} column(s)")
     y, z = _canonical_order(kind, data[:, 0].astype(float), data[:, 1].astype(float))
+    _check_length(kind, y, z, str(path))
     _check_orientation(kind, y, z, str(path))
     return Profile(kind=kind, y_mm=y, z_mm=z, source=str(path), raw_yz=data[:, :2].copy())
 
@@ -232,5 +264,6 @@ def write_simpack_profile(profile: Profile, path: str | Path, comment: str = "")
 
 
 def profile_length_mm(profile: Profile) -> float:
-    """Summed chord length of the profile (CONTACT requires 5..500 mm; a unit check)."""
+    """Summed chord length of the profile (CONTACT requires 5..500 mm; a unit check, made on
+    reading: :data:`PROFILE_LENGTH_MM`)."""
     return float(np.sum(np.hypot(np.diff(profile.y_mm), np.diff(profile.z_mm))))

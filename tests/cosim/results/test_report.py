@@ -403,3 +403,98 @@ def test_compare_draws_the_wheel_rail_quantities_beside_the_first_run(contact_ru
     assert cli.main(["compare", str(contact_run)]) == 0
     png = contact_run.parent / f"compare_{contact_run.name}" / "compare_curve.png"
     assert png.exists() and png.stat().st_size > 10_000
+
+
+# ------------------------------------------------------------------ hostile folders (issue 39)
+def _refused(capsys, *argv, names=()):
+    """report exits 2 naming each of ``names``, with no traceback."""
+    assert cli.main(["report", *map(str, argv)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and all(str(n) in err for n in names), err
+    return err
+
+
+def test_a_figure_linked_from_outside_the_folder_is_not_embedded(tmp_path, capsys):
+    # before: the linked file was base64-embedded into the report
+    secret = tmp_path / "elsewhere.png"
+    secret.write_bytes(b"\x89PNG secret")
+    folder = _folder(tmp_path, "run")
+    (folder / "figure.png").symlink_to(secret)
+    err = _refused(capsys, folder, "--out", tmp_path / "r.html", names=(folder / "figure.png",))
+    assert "symbolic link" in err and not (tmp_path / "r.html").exists()
+
+
+def test_a_figure_linked_to_a_device_is_refused(tmp_path, capsys):
+    # before: a link to /dev/zero crashed it (read to the memory limit)
+    folder = _folder(tmp_path, "run")
+    (folder / "zero.png").symlink_to("/dev/zero")
+    _refused(capsys, folder, names=(folder / "zero.png",))
+
+
+def test_a_figure_linked_inside_the_folder_is_embedded(tmp_path):
+    folder = _folder(tmp_path, "run")
+    (folder / "sub").mkdir()
+    (folder / "sub" / "real.png").write_bytes(b"\x89PNG inside")
+    (folder / "figure.png").symlink_to(folder / "sub" / "real.png")
+    out = tmp_path / "r.html"
+    assert cli.main(["report", str(folder), "--out", str(out)]) == 0
+    assert _read(out).images == ["data:image/png;base64," + base64.b64encode(b"\x89PNG inside").decode()]
+
+
+@pytest.mark.parametrize("marker, words", [("INCOMPLETE", "INCOMPLETE"), (".pneumorail.lock", "writing")])
+def test_a_run_still_being_written_is_refused(tmp_path, capsys, marker, words):
+    # before: exit 0, a report of half a run
+    folder = _folder(tmp_path, "run")
+    (folder / marker).write_text(str(__import__("os").getpid()))
+    assert words in _refused(capsys, folder, names=(folder,))
+
+
+def test_an_interrupted_run_is_reported_with_allow_incomplete_and_not_assessed(tmp_path):
+    folder = _folder(tmp_path, "run", info={"status": "interrupted"})
+    (folder / "INCOMPLETE").write_text("interrupted by SIGINT\n")
+    assert cli.main(["report", str(folder), "--out", str(tmp_path / "r.html"), "--allow-incomplete"]) == 0
+    assert "NOT ASSESSED" in _text(tmp_path / "r.html")
+
+
+@pytest.mark.parametrize("file, content, words", [
+    ("run.json", b"[1, 2]", "expected a JSON object"),
+    ("run.json", b"{\"status\": ", "not valid JSON"),
+    ("summary.csv", bytes(range(256)) * 4, "binary"),
+    ("summary.csv", "valves,k_W_per_K\nTrue,0,extra\n".encode(), "line 2"),
+    ("check.json", b"{\"checks\": {\"a\": 1}}", "checks"),
+    ("check.json", b"{\"checks\": [{\"name\": \"x\", \"status\": \"maybe\"}]}", "checks[0].status"),
+    ("check.json", b"{\"checks\": [[1]]}", "checks[0]"),
+    ("assessment_limits.csv", b"quantity,value\nyq,1\n", "limit"),
+    ("run.json", b"{\"settings\": [1], \"resolved\": 3}", "shape pneumorail writes"),
+])
+def test_reshaped_files_are_refused_naming_the_file(tmp_path, capsys, file, content, words):
+    # before: a traceback (AttributeError, KeyError, UnicodeDecodeError ...)
+    folder = _folder(tmp_path, "run")
+    (folder / file).write_bytes(content)
+    err = _refused(capsys, folder, names=(folder,))
+    assert words in err and (file in err or words == "shape pneumorail writes")
+
+
+def test_a_run_json_that_is_a_device_is_refused(tmp_path, capsys):
+    folder = _folder(tmp_path, "run")
+    (folder / "run.json").unlink()
+    (folder / "run.json").symlink_to("/dev/zero")
+    _refused(capsys, folder, names=(folder / "run.json",))
+
+
+def test_a_sweep_folder_points_at_its_cases(tmp_path, capsys):
+    # before: "not a pneumorail output folder", nothing more
+    sweep = tmp_path / "sweep"
+    (sweep / "cases").mkdir(parents=True)
+    (sweep / "sweep.csv").write_text("case\nabc\n")
+    case = _folder(sweep / "cases", "abc123")
+    err = _refused(capsys, sweep, names=(sweep,))
+    assert "cases" in err and str(case) in err
+
+
+def test_a_lock_left_by_a_process_that_is_gone_does_not_block_the_report(tmp_path):
+    gone = subprocess.Popen(["true"])
+    gone.wait()
+    folder = _folder(tmp_path, "run")
+    (folder / ".pneumorail.lock").write_text(str(gone.pid))
+    assert cli.main(["report", str(folder), "--out", str(tmp_path / "r.html")]) == 0
