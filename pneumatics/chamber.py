@@ -5,10 +5,12 @@ chambers along the first axis and, optionally, independent cases along a trailin
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional, Tuple
 
 import numpy as np
+
+from pneumorail.quantities import plausible
 
 
 @dataclass(frozen=True)
@@ -28,11 +30,13 @@ class Bellow:
     V0_m3: float = 0.012
     dV_dz_m2: float = 0.13
     A0_m2: float = 0.13
-    dA_dz_m: float = 0.0
+    dA_dz_m: float = field(default=0.0, metadata=plausible(None, None, "m",
+                                                           "change of effective area with crushing, either sign"))
     p0_Pa: Optional[float] = None
     T0_K: Optional[float] = None
-    area_table_z_m: Tuple[float, ...] = ()
-    area_table_m2: Tuple[float, ...] = ()
+    area_table_z_m: Tuple[float, ...] = field(default=(), metadata=plausible(-0.5, 0.5, "m", "crushing from the static height"))
+    area_table_m2: Tuple[float, ...] = field(default=(), metadata=plausible(0.0, 2.0, "m^2", "an airspring's effective area",
+                                                                                low_inclusive=False))
 
     def volume_m3(self, z_m):
         return self.V0_m3 - self.dV_dz_m2 * z_m

@@ -17,13 +17,16 @@ circuit (:mod:`pneumatics.circuit`) holds their states.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Tuple
 
 import numpy as np
 from scipy.special import gammainc
 
+from pneumorail.quantities import nonnegative, plausible, ranged
+
 from .compiled import arrays
+from .orifice import CRITICAL_RATIO
 
 #: Sonic conductance of a fully open levelling valve [m^3/(s Pa)]. Assumed: a large railway
 #: levelling valve passes about 1000 l/min ANR, ~0.02 kg/s choked from a 9 bar reservoir, i.e.
@@ -97,11 +100,12 @@ class LevellingValve:
     supply_C_m3_per_sPa: Tuple[float, ...] = (0.0, 0.0, LEVELLING_C_MAX)
     exhaust_lever_m: Tuple[float, ...] = (0.0, 0.005, 0.025)
     exhaust_C_m3_per_sPa: Tuple[float, ...] = (0.0, 0.0, LEVELLING_C_MAX)
-    b_critical: float = 0.4
-    lag_s: float = 0.0
-    delay_s: float = 0.0
-    delay_stages: int = 16
-    hysteresis_m: float = 0.0
+    b_critical: float = field(default=0.4, metadata=ranged(CRITICAL_RATIO))
+    lag_s: float = field(default=0.0, metadata=ranged(nonnegative("s", "0: no lag")))
+    delay_s: float = field(default=0.0, metadata=ranged(nonnegative("s", "0: no delay")))
+    delay_stages: int = field(default=16, metadata=plausible(1, 1000, why="first-order stages approximating the delay; "
+                                                                           "one state each"))
+    hysteresis_m: float = field(default=0.0, metadata=plausible(0.0, 0.05, "m", "the lever's play; 0: no play"))
 
     @property
     def sensed_bellows(self) -> Tuple[str, ...]:

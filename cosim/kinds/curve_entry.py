@@ -8,7 +8,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
@@ -38,14 +38,17 @@ from cosim.results.overlay import Selection, case_series
 from cosim.results.plots import Curve, Figure, Panel, Span, save_panels
 from cosim.results.series import WHEELSETS, with_column
 from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
-from cosim.scenario.schema import Range, build, check_valve_settings, describe, positive
+from cosim.scenario.schema import build, check_valve_settings, describe
+from pneumorail.quantities import plausible, positive, ranged
 from vehicle.irregularities import CHANNELS, MAX_SAMPLES, PERIOD_FACTOR, TrackIrregularity, canonical_kind
-from vehicle.params import BELLOWS, WHEELS, ContactParams, VehicleParams
+from vehicle.params import BELLOWS, TABLE_SMOOTHING, WHEELS, ContactParams, VehicleParams
 from vehicle.track import TRANSITION_SHAPES, Arc, TrackGeometry
 
 #: Largest cant [rad]: 0.2 rad is 300 mm over the 1.5 m rail-centre distance; railway cant is
 #: limited to 150-200 mm (EN 13803: 180 mm, ~0.12 rad).
 MAX_CANT_RAD = 0.2
+#: the range of a cant (field metadata of a curve's and a ride's)
+CANT = plausible(-MAX_CANT_RAD, MAX_CANT_RAD, "rad", "0.2 rad = 300 mm over 1.5 m; railway cant is at most ~0.12 rad")
 #: Highest running speed [m/s]: 100 m/s = 360 km/h, beyond any metro and the wheel-rail model.
 MAX_SPEED_M_PER_S = 100.0
 #: Longest track [m]: the car tabulates it every 0.1 m (vehicle.guidance.TrackSampler), ~100 bytes
@@ -126,34 +129,27 @@ class CurveTest:
     ... fra_6, seed, wavelength_range_m: [3, 150], channels, ds_m, start_m, taper_m} or {file:
     path relative to the scenario} (:class:`IrregularitySpec`)."""
 
-    speed_m_per_s: float = 10.0
-    straight_m: float = 20.0
-    transition_m: float = 15.0
+    speed_m_per_s: float = field(default=10.0, metadata=plausible(0.0, MAX_SPEED_M_PER_S, "m/s", "360 km/h at most",
+                                                                 low_inclusive=False))
+    straight_m: float = field(default=20.0, metadata=ranged(positive("m")))
+    transition_m: float = field(default=15.0, metadata=ranged(positive("m")))
     transition_shape: str = "bloss"
-    radius_m: float = 100.0
-    arc_m: float = 300.0
-    cant_rad: float = 0.0
+    radius_m: float = field(default=100.0, metadata=ranged(positive("m")))
+    arc_m: float = field(default=300.0, metadata=ranged(positive("m")))
+    cant_rad: float = field(default=0.0, metadata=CANT)
     direction: int = 1
     duration_s: float = 30.0
     valve_settings: Tuple[bool, ...] = (False, True)
     window_s: Optional[float] = None
     guidance: str = "contact"
     friction_coefficient: Optional[float] = None
-    contact_damping_N_s_per_m: Optional[float] = None
-    contact_smoothing_mm: Optional[float] = None
+    contact_damping_N_s_per_m: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 1e7, "N s/m", "the shipped 2e5 stands in for the track's damping"))
+    contact_smoothing_mm: Optional[float] = field(default=None, metadata=TABLE_SMOOTHING)
     nadal_flange_angle_deg: float = 70.0
     nadal_friction: float = 0.36
     prudhomme_alpha: float = 1.0
     irregularity: Optional[IrregularitySpec] = None
-
-    FIELD_RANGES = {
-        "speed_m_per_s": Range(0.0, MAX_SPEED_M_PER_S, False, True, "m/s", "360 km/h at most"),
-        "straight_m": positive("m"), "transition_m": positive("m"), "radius_m": positive("m"), "arc_m": positive("m"),
-        "cant_rad": Range(-MAX_CANT_RAD, MAX_CANT_RAD, unit="rad",
-                          why="0.2 rad = 300 mm over 1.5 m; railway cant is at most ~0.12 rad"),
-        "contact_damping_N_s_per_m": Range(0.0, 1e7, unit="N s/m", why="the shipped 2e5 stands in for the track's damping"),
-        "contact_smoothing_mm": Range(0.0, 1.0, unit="mm", why="0: the rigid table; 1 mm blurs the flange itself"),
-    }
 
     @property
     def window(self) -> float:

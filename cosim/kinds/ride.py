@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Tuple
 
@@ -31,7 +31,8 @@ from cosim.results.outcome import Outcome, largest, warn
 from cosim.results.overlay import Selection
 from cosim.results.plots import Curve, Figure, Panel, Span, k_legend, save_panels
 from cosim.scenario.model import Scenario
-from cosim.scenario.schema import Range, build, check_valve_settings, positive
+from cosim.scenario.schema import build, check_valve_settings
+from pneumorail.quantities import plausible, positive, ranged
 from vehicle.params import FLOOR_POINTS, VehicleParams
 
 #: the default irregularity: ERRI B176 low level, all four channels
@@ -49,19 +50,16 @@ class RideTest:
     B176 low in all four channels, seed 0). ``valve_settings``: runs with the levelling and
     differential valves disconnected (false) and connected (true)."""
 
-    speeds_m_per_s: Tuple[float, ...] = (10.0, 20.0)
-    record_s: float = 300.0
-    settle_s: float = 5.0
+    speeds_m_per_s: Tuple[float, ...] = field(default=(10.0, 20.0), metadata=ranged(non_empty=True, unique=True))
+    record_s: float = field(default=300.0, metadata=ranged(positive(
+        "s", "the comfort record (EN 12299: 300 s); at least one 5 s block")))
+    settle_s: float = field(default=5.0, metadata=plausible(0.0, None, "s", "the run before the record"))
     radius_m: Optional[float] = None
     cant_rad: float = 0.0
-    transition_m: float = 30.0
-    valve_settings: Tuple[bool, ...] = (True,)
+    transition_m: float = field(default=30.0, metadata=ranged(positive("m", "the transition into the curve")))
+    valve_settings: Tuple[bool, ...] = field(default=(True,), metadata=ranged(non_empty=True, unique=True))
     irregularity: Optional[IrregularitySpec] = None
 
-    FIELD_RANGES = {"record_s": positive("s", "the comfort record (EN 12299: 300 s); at least one 5 s block"),
-                    "settle_s": Range(0.0, None, unit="s", why="the run before the record"),
-                    "transition_m": positive("m", "the transition into the curve")}
-    FIELD_LIST_RULES = {"speeds_m_per_s": (True, True), "valve_settings": (True, True)}
 
 
 def curve_at(ride: RideTest, speed_m_per_s: float, vehicle: VehicleParams) -> Tuple[CurveTest, float]:
