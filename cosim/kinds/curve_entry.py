@@ -23,6 +23,8 @@ from cosim.limits import en14363
 from cosim.limits.assessment import STEP_M
 from cosim.limits.checks import CaseMetrics
 from cosim.limits.criteria import (
+    NADAL_FLANGE_ANGLE_DEG,
+    NADAL_FRICTION,
     SLIDING_MEAN_M,
     en14363_twist_limit,
     largest_track_twist,
@@ -40,7 +42,14 @@ from cosim.results.series import WHEELSETS, with_column
 from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
 from cosim.scenario.schema import build, check_valve_settings, describe
 from pneumorail.quantities import plausible, positive, ranged
-from vehicle.irregularities import CHANNELS, MAX_SAMPLES, PERIOD_FACTOR, TrackIrregularity, canonical_kind
+from vehicle.irregularities import (
+    CHANNELS,
+    DEFAULT_WAVELENGTH_RANGE_M,
+    MAX_SAMPLES,
+    PERIOD_FACTOR,
+    TrackIrregularity,
+    canonical_kind,
+)
 from vehicle.params import BELLOWS, TABLE_SMOOTHING, WHEELS, ContactParams, VehicleParams
 from vehicle.track import TRANSITION_SHAPES, Arc, TrackGeometry
 
@@ -74,8 +83,8 @@ class IrregularitySpec:
 
     psd: Optional[str] = None
     seed: int = 0
-    wavelength_range_m: Tuple[float, ...] = (3.0, 150.0)
-    channels: Tuple[str, ...] = ("lateral", "vertical", "cross_level", "gauge")
+    wavelength_range_m: Tuple[float, ...] = DEFAULT_WAVELENGTH_RANGE_M
+    channels: Tuple[str, ...] = CHANNELS
     ds_m: float = 0.25
     start_m: Optional[float] = None
     taper_m: float = 10.0
@@ -146,8 +155,8 @@ class CurveTest:
     contact_damping_N_s_per_m: Optional[float] = field(default=None, metadata=plausible(
         0.0, 1e7, "N s/m", "the shipped 2e5 stands in for the track's damping"))
     contact_smoothing_mm: Optional[float] = field(default=None, metadata=TABLE_SMOOTHING)
-    nadal_flange_angle_deg: float = 70.0
-    nadal_friction: float = 0.36
+    nadal_flange_angle_deg: float = NADAL_FLANGE_ANGLE_DEG
+    nadal_friction: float = NADAL_FRICTION
     prudhomme_alpha: float = 1.0
     irregularity: Optional[IrregularitySpec] = None
 

@@ -33,10 +33,11 @@ from cosim.results.plots import Curve, Figure, Panel, Span, k_legend, save_panel
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import build, check_valve_settings
 from pneumorail.quantities import plausible, positive, ranged
+from vehicle.irregularities import CHANNELS
 from vehicle.params import FLOOR_POINTS, VehicleParams
 
 #: the default irregularity: ERRI B176 low level, all four channels
-DEFAULT_IRREGULARITY = {"psd": "erri_b176_low", "seed": 0, "channels": ["lateral", "vertical", "cross_level", "gauge"]}
+DEFAULT_IRREGULARITY = {"psd": "erri_b176_low", "seed": 0, "channels": list(CHANNELS)}
 #: room left on the track after the record [m]
 TRACK_MARGIN_M = 30.0
 
