@@ -274,8 +274,12 @@ class VehicleParams:
         return tuple(xb + sign * a for xb in self.bogie_x_m for sign in (1.0, -1.0))
 
 
-#: the range of the contact table's smoothing (field metadata; also the scenario keys that set it)
+#: ranges of the contact's parameters (field metadata; also of the scenario keys that set them):
+#: the table's smoothing, a friction coefficient (above 1 no rail, dry or wet, grips), the normal
+#: damping (the shipped 2e5 stands in for the track's; 1e7 N s/m overdamps the contact's modes)
 TABLE_SMOOTHING = plausible(0.0, 1.0, "mm", "0: the rigid table; 1 mm blurs the flange itself")
+FRICTION = plausible(0.0, 1.0, why="a wheel-rail friction coefficient; dry rail 0.3-0.5", low_inclusive=False)
+CONTACT_DAMPING = plausible(0.0, 1e7, "N s/m", "the shipped 2e5 stands in for the track's damping")
 
 
 @dataclass(frozen=True)
@@ -296,7 +300,7 @@ class ContactParams:
     # Wheel-rail friction coefficient mu: the creep forces saturate at mu N. 0.36 is the value
     # the issue's Nadal limit uses (70 deg flange, mu 0.36: Y/Q 1.20); dry rail 0.3-0.5, wet
     # 0.15-0.25 (Iwnicki, Handbook of Railway Vehicle Dynamics, ch. "Wheel-rail contact").
-    friction_coefficient: float = 0.36
+    friction_coefficient: float = field(default=0.36, metadata=FRICTION)
     # Creepages are slip velocities divided by the running speed V; below this speed they are
     # divided by it instead, so that the car can stand (V = 0, the twist test) or start: the
     # creep forces then act as viscous forces f_ij / V_min on the slip velocities (for a 30 kN
@@ -322,7 +326,7 @@ class ContactParams:
     # flanging wheelset's eigenvalues reach +82 /s (vehicle/wheelrail/stability.py), which at
     # 5 ms steps only the integrator's numerical damping hid (docs/wheel_rail.md, "Flange
     # contact and step convergence").
-    normal_damping_N_s_per_m: float = 2.0e5
+    normal_damping_N_s_per_m: float = field(default=2.0e5, metadata=CONTACT_DAMPING)
     # Gaussian smoothing of the contact table the force law reads, standard deviation in mm of
     # wheelset lateral displacement (vehicle.wheelrail.contact_law.ContactLawTable: the rigid
     # table's jumps and its fast turn across the conformal flange root, smoothed as an elastic
@@ -348,8 +352,17 @@ class ContactParams:
             raise ValueError(f"flange_angle_rad must lie in (0, pi/2), got {self.flange_angle_rad}")
 
 
-#: the range of a flexible track's stiffness or damping (field metadata; a rigid track has none)
-_TRACK = ranged(positive(why="a flexible track's mass, stiffness or damping"))
+#: ranges of a flexible track's fields (metadata; a rigid track has none), per wheelset (both
+#: rails), around :func:`slab_track`'s values: the mass that moves with a wheelset, from the rails
+#: alone (~60 kg/m each) to a concrete slab (1520 kg), with its roll inertia; support stiffnesses
+#: of soft ballast (~10 MN/m) to a stiff slab (~1 GN/m); dampings of rail pads and ballast (tens to
+#: hundreds of kN s/m). A value in tonnes, MN/m or kN s/m falls out, and the slip is named
+_TRACK_MASS = plausible(20.0, 2e4, "kg", "a track mass per wheelset, rails to slab")
+_TRACK_INERTIA = plausible(1.0, 1e5, "kg m^2", "a track mass's roll inertia")
+_TRACK_STIFFNESS = plausible(1e6, 1e10, "N/m", "a track's support per wheelset, soft ballast to slab")
+_TRACK_DAMPING = plausible(1e3, 1e7, "N s/m", "a track's damping per wheelset")
+_TRACK_ROLL_STIFFNESS = plausible(1e5, 1e10, "N m/rad", "a track's roll support per wheelset")
+_TRACK_ROLL_DAMPING = plausible(1e2, 1e8, "N m s/rad", "a track's roll damping per wheelset")
 #: track models of :class:`TrackStructure`
 TRACK_MODELS = ("rigid", "flexible")
 
@@ -367,14 +380,14 @@ class TrackStructure:
     Values and sources: :func:`slab_track`."""
 
     model: str = "rigid"
-    mass_kg: float = 0.0
-    roll_inertia_kg_m2: float = 0.0
-    lateral_stiffness_N_per_m: float = field(default=0.0, metadata=_TRACK)
-    lateral_damping_N_s_per_m: float = field(default=0.0, metadata=_TRACK)
-    vertical_stiffness_N_per_m: float = field(default=0.0, metadata=_TRACK)
-    vertical_damping_N_s_per_m: float = field(default=0.0, metadata=_TRACK)
-    roll_stiffness_N_m_per_rad: float = field(default=0.0, metadata=_TRACK)
-    roll_damping_N_m_s_per_rad: float = field(default=0.0, metadata=_TRACK)
+    mass_kg: float = field(default=0.0, metadata=_TRACK_MASS)
+    roll_inertia_kg_m2: float = field(default=0.0, metadata=_TRACK_INERTIA)
+    lateral_stiffness_N_per_m: float = field(default=0.0, metadata=_TRACK_STIFFNESS)
+    lateral_damping_N_s_per_m: float = field(default=0.0, metadata=_TRACK_DAMPING)
+    vertical_stiffness_N_per_m: float = field(default=0.0, metadata=_TRACK_STIFFNESS)
+    vertical_damping_N_s_per_m: float = field(default=0.0, metadata=_TRACK_DAMPING)
+    roll_stiffness_N_m_per_rad: float = field(default=0.0, metadata=_TRACK_ROLL_STIFFNESS)
+    roll_damping_N_m_s_per_rad: float = field(default=0.0, metadata=_TRACK_ROLL_DAMPING)
 
     def __post_init__(self):
         if self.model not in TRACK_MODELS:

@@ -21,9 +21,9 @@ from cosim.results.overlay import Selection, case_series
 from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
 from cosim.scenario.circuits import chambers_and_pipe, compile_check, with_preset
 from cosim.scenario.model import Scenario
-from cosim.scenario.schema import MAX_SAMPLES, MAX_STEPS, build, check_keys, coerce, k_label, require
+from cosim.scenario.schema import MAX_SAMPLES, MAX_STEPS, build, check_keys, check_range, coerce, k_label, range_of, require
 from pneumatics.chamber import Bellow, Tank, quasi_static_stiffness_N_per_m
-from pneumatics.gas import AIR
+from pneumatics.gas import ABSOLUTE_PRESSURE, AIR
 from pneumatics.pipe import Pipe
 from pneumatics.rig import (
     bellow_tank_components,
@@ -97,7 +97,7 @@ class RigCircuit:
     bellow: Bellow
     tank: Optional[Tank]
     pipe: Pipe
-    p0_Pa: float
+    p0_Pa: float = field(metadata=ranged(ABSOLUTE_PRESSURE))
 
     def components(self, with_tank: bool = True) -> Dict[str, object]:
         return bellow_tank_components(self.bellow, self.tank if with_tank else None, self.pipe)
@@ -163,8 +163,7 @@ def _rig_circuit(data: Mapping, file) -> RigCircuit:
     data = with_preset(data, file, ("bellow", "tank", "pipe", "p0_Pa"))
     bellow, tank, pipe = chambers_and_pipe(data, file)
     p0 = coerce(require(data, "p0_Pa", file, ["circuit"]), float, file, ["circuit", "p0_Pa"])
-    if not p0 > 0:
-        raise ScenarioError(file, ["circuit", "p0_Pa"], f"expected an absolute pressure > 0 Pa, got {p0:g}")
+    check_range(p0, range_of(RigCircuit, "p0_Pa"), file, ["circuit", "p0_Pa"])
     rig = RigCircuit(bellow, tank, pipe, p0)
     compile_check(rig.components(tank is not None), file, ["circuit"], {"bellow": "bellow", "tank": "tank", "pipe": "pipe"})
     return rig

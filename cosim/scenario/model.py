@@ -51,8 +51,12 @@ class SolverSettings:
         0.0, 1.0, why="generalized-alpha: 1 damps nothing, 0 the most"))
 
 
-#: a roll limit of :class:`StateLimits` (field metadata)
+#: ranges of :class:`StateLimits`' fields (metadata): a roll relative to the track plane (3.2 rad:
+#: upside down); air temperature and pressure limits up to 10 000 K and 1000 bar, far beyond
+#: any air
 _ROLL = plausible(0.0, 3.2, "rad", "a roll relative to the track plane", low_inclusive=False)
+_TEMPERATURE_LIMIT = plausible(0.0, 1e4, "K", "a limit of the air's temperature", low_inclusive=False)
+_PRESSURE_LIMIT = plausible(0.0, 1e8, "Pa absolute", "a limit of the air's pressure", low_inclusive=False)
 
 
 @dataclass(frozen=True)
@@ -88,10 +92,10 @@ class StateLimits:
         0.0, 10.0, why="a fraction of the bellow height", low_inclusive=False))
     bellow_volume_fraction: float = field(default=0.05, metadata=plausible(
         0.0, 1.0, why="a fraction of the bellow's volume", high_inclusive=False))
-    T_min_K: float = 150.0
-    T_max_K: float = 1000.0
-    p_min_Pa: float = 1.0e4
-    p_max_Pa: float = 5.0e6
+    T_min_K: float = field(default=150.0, metadata=_TEMPERATURE_LIMIT)
+    T_max_K: float = field(default=1000.0, metadata=_TEMPERATURE_LIMIT)
+    p_min_Pa: float = field(default=1.0e4, metadata=_PRESSURE_LIMIT)
+    p_max_Pa: float = field(default=5.0e6, metadata=_PRESSURE_LIMIT)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ import dataclasses
 import math
 import re
 import typing
-from typing import Any, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 from cosim.errors import ScenarioError
 from pneumorail.quantities import Range, list_rule_of_field, number_text, positive, range_of_field
@@ -70,18 +70,36 @@ def list_rule_of(cls, name: str) -> Optional[Tuple[bool, bool]]:
     return list_rule_of_field(f) if f is not None else None
 
 
-#: unit slips a value out of its range may be: (unit, factor to the right unit, what was typed)
-UNIT_SLIPS = (("kg", 1e3, "tonnes"), ("m", 1e-3, "millimetres"), ("m", 1e-2, "centimetres"),
-              ("kg m^2", 1e3, "t m^2"), ("m^2", 1e-4, "cm^2"), ("N/m", 1e3, "kN/m"), ("N s/m", 1e3, "kN s/m"),
-              ("N m/rad", 1e3, "kN m/rad"))
+class UnitSlip(NamedTuple):
+    """A unit a user may have typed instead of the field's ``unit``: the value in the right unit is
+    ``value * factor + offset``."""
+
+    unit: str
+    factor: float
+    typed: str
+    offset: float = 0.0
+
+
+#: unit slips a value out of its range may be, tried in this order (the first that brings the
+#: value into its range is named)
+UNIT_SLIPS = (UnitSlip("kg", 1e3, "tonnes"), UnitSlip("m", 1e-3, "millimetres"), UnitSlip("m", 1e-2, "centimetres"),
+              UnitSlip("m", 1e3, "kilometres"), UnitSlip("kg m^2", 1e3, "t m^2"), UnitSlip("m^2", 1e-4, "cm^2"),
+              UnitSlip("m^3", 1e-3, "litres"), UnitSlip("N/m", 1e3, "kN/m"), UnitSlip("N/m", 1e6, "MN/m"),
+              UnitSlip("N s/m", 1e3, "kN s/m"), UnitSlip("N m/rad", 1e3, "kN m/rad"), UnitSlip("N m/rad", 1e6, "MN m/rad"),
+              UnitSlip("N m s/rad", 1e3, "kN m s/rad"),
+              *(UnitSlip(pa, factor, typed) for pa in ("Pa absolute", "Pa") for factor, typed in ((1e5, "bar"), (1e3, "kPa"))),
+              UnitSlip("rad", math.pi / 180.0, "degrees"), UnitSlip("s", 1e-3, "milliseconds"),
+              UnitSlip("m/s", 1.0 / 3.6, "km/h"), UnitSlip("K", 1.0, "degrees Celsius", 273.15))
 
 
 def unit_slip(value: float, rule: Range) -> str:
     """A hint when ``value`` out of ``rule`` would be in it in the unit a user may have typed
-    instead (tonnes for kg, millimetres for m ...): ``"; tonnes? (26 t = 26000 kg)"``."""
-    for unit, factor, typed in UNIT_SLIPS:
-        if rule.unit == unit and value != 0 and rule.admits(value * factor):
-            return f"; {typed}? ({_num(value)} {typed} = {_num(value * factor)} {unit})"
+    instead (tonnes for kg, millimetres for m, bar for Pa ...): ``"; tonnes? (26 tonnes = 26000
+    kg)"``."""
+    for slip in UNIT_SLIPS:
+        right = value * slip.factor + slip.offset
+        if rule.unit == slip.unit and value != 0 and rule.admits(right):
+            return f"; {slip.typed}? ({_num(value)} {slip.typed} = {_num(right)} {slip.unit})"
     return ""
 
 
