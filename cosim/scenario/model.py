@@ -53,7 +53,7 @@ class SolverSettings:
 
 #: ranges of :class:`StateLimits`' fields (metadata): a roll relative to the track plane (3.2 rad:
 #: upside down); air temperature and pressure limits up to 10 000 K and 1000 bar, far beyond
-#: any air
+#: any air (a limit must also admit the air a run starts with: cosim.load)
 _ROLL = plausible(0.0, 3.2, "rad", "a roll relative to the track plane", low_inclusive=False)
 _TEMPERATURE_LIMIT = plausible(0.0, 1e4, "K", "a limit of the air's temperature", low_inclusive=False)
 _PRESSURE_LIMIT = plausible(0.0, 1e8, "Pa absolute", "a limit of the air's pressure", low_inclusive=False)
@@ -63,8 +63,10 @@ _PRESSURE_LIMIT = plausible(0.0, 1e8, "Pa absolute", "a limit of the air's press
 class StateLimits:
     """States no car can be in: a case whose state passes one of these stops at the end of that
     macro-step with a diagnosis (time, body or component, state) and the run exits 1, keeping
-    what it computed (:mod:`cosim.limits.watch`). Each is far beyond what a running car reaches, so
-    that it marks a capsized, derailed or crushed car, not a demanding one:
+    what it computed (:mod:`cosim.limits.watch`); a limit the air already passes when the run
+    starts (a chamber's initial pressure or temperature, e.g. ``T_max_K`` written in degrees
+    Celsius) is refused when the scenario is loaded. Each is far beyond what a running car reaches,
+    so that it marks a capsized, derailed or crushed car, not a demanding one:
 
     * ``carbody_roll_rad``: the carbody rolled relative to the track plane by more than this
       (0.2 rad: the paper's car rolls 0.03 rad at 1 m/s^2 of unbalanced lateral acceleration;

@@ -474,9 +474,37 @@ UNITS = {  # a number in its field's plausible range, else refused with the unit
 }
 
 
+def _valve_faults(*faults):
+    return {"faults": list(faults), "twist.valve_settings": [True]}
+
+
+SEMANTICS = {  # values each in range that cannot be meant together: refused before any run
+    "temperature limit in Celsius": Case("twist", "state_limits.T_max_K", "degrees Celsius? (200 degrees Celsius = "
+                                                                          "473.15 K)", {"state_limits.T_max_K": 200}),
+    "pressure limit below the static pressure": Case("twist", "state_limits.p_max_Pa", "when the run starts (FL: ",
+                                                     {"state_limits.p_max_Pa": 3e5}),
+    "pressure limit in bar": Case("twist", "state_limits.p_max_Pa", "bar? (50 bar = 5000000 Pa absolute)",
+                                  {"state_limits.p_max_Pa": 50, "state_limits.p_min_Pa": 1}),
+    "lower pressure limit above the supply": Case("en", "state_limits.p_min_Pa", "every case stops at its first step",
+                                                  {"state_limits.p_min_Pa": 5e5}),
+    "lower temperature limit above ambient": Case("twist", "state_limits.T_min_K", "below the air's temperature",
+                                                  {"state_limits.T_min_K": 300}),
+    "stuck open and stuck closed at once": Case("en", "faults[1]", "faults[0] already makes 'lv_FL' stuck open at 1 s",
+                                                _valve_faults({"kind": "stuck_open", "component": "lv_FL", "side": "supply",
+                                                               "t_s": 1.0},
+                                                              {"kind": "stuck_closed", "component": "lv_FL", "t_s": 1.0})),
+    "blocked and ruptured at once": Case("twist", "faults[1]", "one fault of a component at a time",
+                                         {"faults": [{"kind": "blocked", "component": "pipe_FL", "t_s": 0.5},
+                                                     {"kind": "ruptured", "component": "pipe_FL", "t_s": 0.5}]}),
+    "mistyped valve with the valves also off": Case("en", "faults[0].component", "lv_FL, lv_FR",
+                                                    {"faults": [{"kind": "stuck_closed", "component": "lv_FX"}],
+                                                     "twist.valve_settings": [False, True]}),
+}
+
 CORPUS = {f"{group}: {name}": case for group, cases in (
     ("numbers", NUMBERS), ("duplicates", DUPLICATES), ("files", FILES), ("keys", KEYS), ("types", TYPES),
-    ("cross-field", CROSS), ("faults", FAULTS), ("stability", STABILITY), ("units", UNITS)) for name, case in cases.items()}
+    ("cross-field", CROSS), ("faults", FAULTS), ("stability", STABILITY), ("units", UNITS),
+    ("semantics", SEMANTICS)) for name, case in cases.items()}
 
 
 def test_the_corpus_is_large_enough():
@@ -550,6 +578,15 @@ def test_explicit_bellows_in_any_order_are_put_in_the_car_order(tmp_path):
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
     names = [n for n, _ in load_scenario(tmp_path / "s.yaml").circuit.explicit]
     assert names[:4] == ["FL", "FR", "RL", "RR"]
+
+
+def test_two_openings_of_one_chamber_may_coincide(tmp_path):
+    """Two bursts of one bellow at one instant are two holes, not a contradiction."""
+    data = BASES["twist"]()
+    data["faults"] = _burst() + _burst(area_m2=1e-4)
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(data))
+    assert len(load_scenario(path).circuit.faults) == 2
 
 
 def test_the_valves_default_tables_may_be_written(tmp_path):
