@@ -360,6 +360,16 @@ def refuse_check(metric: str, curve: CurveTest) -> Optional[str]:
     return None
 
 
+def refuse_zone(metric: str, zone: str, curve: CurveTest) -> Optional[str]:
+    """Why ``checks`` cannot name ``metric`` in ``zone`` (None: it can): EN 14363 assesses the
+    quasi-static values in the arcs R < 600 m only."""
+    if metric in en14363.QUASI_STATIC and zone not in en14363.CURVE_ZONES:
+        curves = [z for z in zones(curve) if z in en14363.CURVE_ZONES]
+        return (f"{metric} is a quasi-static value of an arc R < 600 m: zone {zone!r} has none (this track's: "
+                f"{', '.join(curves)})")
+    return None
+
+
 def zones(curve: CurveTest) -> Tuple[str, ...]:
     """The test zones of the curve's track (:mod:`cosim.limits.assessment`), in track order."""
     return tuple(dict.fromkeys(en14363.zone_table(curve.track())[1]))
@@ -918,6 +928,7 @@ class CurveEntryKind(CarKind):
     valve_settings = staticmethod(valve_settings)
     extra_files = staticmethod(extra_files)
     refuse_check = staticmethod(refuse_check)
+    refuse_zone = staticmethod(refuse_zone)
     zones = staticmethod(zones)
     make_car = staticmethod(make_car)
     run = staticmethod(run)

@@ -499,6 +499,9 @@ SEMANTICS = {  # values each in range that cannot be meant together: refused bef
     "mistyped valve with the valves also off": Case("en", "faults[0].component", "lv_FL, lv_FR",
                                                     {"faults": [{"kind": "stuck_closed", "component": "lv_FX"}],
                                                      "twist.valve_settings": [False, True]}),
+    "quasi-static check on the straight": Case("curve", "checks[0]", "zone 'straight' has none",
+                                               {"curve.guidance": "contact",
+                                                "checks": ["Y_2m_p50[zone=straight] <= 60000"]}),
 }
 
 CORPUS = {f"{group}: {name}": case for group, cases in (
