@@ -16,7 +16,7 @@ from cosim.scenario.model import (
     StateLimits,
     VerifySettings,
 )
-from cosim.scenario.schema import _type_name
+from cosim.scenario.schema import _type_name, range_of
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.faults import Fault
@@ -73,11 +73,13 @@ HEADER = """# Scenario key reference
 
 Generated from the code by `python -m cosim.keyref > docs/scenario_keys.md` (a test fails when
 this file is stale). Every key is optional unless the scenario kind needs it; a missing key takes
-the default shown. Units are in the names (SI: Pa absolute, K, kg, m, s, N, W/K). Top-level keys
+the default shown; a number must lie in the range shown (its reason in brackets: what the bounds rest
+on; a value outside is refused, naming a likely unit slip such as bar for Pa or mm for m). Units
+are in the names (SI: Pa absolute, K, kg, m, s, N, W/K). Top-level keys
 of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is isothermal),
 `checks` (car scenarios: e.g. `dqq_max <= 0.6`, `dqq_max[3R] <= 0.6`, `dqq_max[k=0] <= 0.6`,
 `yq_2m_p9985[zone=R<250] <= 1.2`; docs/assessment.md).
-The rig kinds ({rig}) take `circuit: {{bellow, tank, pipe, p0_Pa}}` and `test`; the car kinds
+The rig kinds ({rig}) take `circuit: {{bellow, tank, pipe, p0_Pa}}` (`p0_Pa`: {p0}) and `test`; the car kinds
 ({car}) take `vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the
 sections below, or an explicit `components:` mapping of named components with a `type`),
 `solver`, `verify`, `state_limits` and their experiment ({sections}).
@@ -102,13 +104,26 @@ def _default(field: dataclasses.Field) -> str:
     return f"`{value}`"
 
 
+def _allowed(cls, name: str, tp) -> str:
+    """A number's range (its field's, or its unit suffix's: :func:`cosim.scenario.schema.range_of`),
+    as the loader states it; empty for other values."""
+    numeric = any(t in (int, float) for t in (tp, *typing.get_args(tp),
+                                              *(a for t in typing.get_args(tp) for a in typing.get_args(t))))
+    rule = range_of(cls, name) if numeric else None
+    if rule is None:
+        return ""
+    default = {f.name: f.default for f in dataclasses.fields(cls)}[name]
+    infinite = isinstance(default, float) and math.isinf(default) and not rule.zero_or_inf
+    return ("`.inf` or " if infinite else "") + rule.expected(tp is int)      # .inf: where the default is (schema.build)
+
+
 def section(key: str, cls, note: str) -> str:
     hints = typing.get_type_hints(cls)
     doc = inspect.cleandoc(cls.__doc__ or "").split("\n\n")[0].replace("\n", " ")
-    lines = [f"## `{key}` ({cls.__name__})", "", f"{note}. {doc}", "", "| key | type | default |",
-             "| --- | --- | --- |"]
+    lines = [f"## `{key}` ({cls.__name__})", "", f"{note}. {doc}", "", "| key | type | default | allowed |",
+             "| --- | --- | --- | --- |"]
     for f in dataclasses.fields(cls):
-        lines.append(f"| `{f.name}` | {_type_name(hints[f.name])} | {_default(f)} |")
+        lines.append(f"| `{f.name}` | {_type_name(hints[f.name])} | {_default(f)} | {_allowed(cls, f.name, hints[f.name])} |")
     return "\n".join(lines) + "\n"
 
 
@@ -116,7 +131,9 @@ def header() -> str:
     """:data:`HEADER` with the registry's kinds (:data:`cosim.kinds.KINDS`)."""
     from cosim.kinds import KINDS
     car = [k for k in KINDS.values() if k.car]
+    from cosim.kinds.rig import RigCircuit
     return HEADER.format(rig=", ".join(f"`{k.name}`" for k in KINDS.values() if not k.car),
+                         p0=range_of(RigCircuit, "p0_Pa").expected(),
                          car=", ".join(f"`{k.name}`" for k in car),
                          sections=", ".join(f"`{k.section}`" for k in car))
 

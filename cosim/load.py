@@ -20,7 +20,7 @@ from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 from cosim.engine.master import COUPLINGS
 from cosim.errors import ScenarioError
 from cosim.scenario.checks import parse_checks
-from cosim.scenario.circuits import car_circuit, check_initial_state, parse_faults
+from cosim.scenario.circuits import InitialAir, car_circuit, check_initial_state, parse_faults
 from cosim.scenario.model import (
     DEFAULT_TRACK_MODEL,
     DEFAULT_TRACK_PRESET,
@@ -40,9 +40,12 @@ from cosim.scenario.schema import (
     folder_name,
     k_values,
     known_name,
+    range_of,
     require,
+    unit_slip,
 )
 from cosim.scenario.yaml_input import MAX_BYTES, parse_yaml, read_yaml
+from pneumorail.quantities import Range
 from vehicle.params import TRACK_MODELS, TRACK_PRESETS, TrackStructure, VehicleParams
 
 __all__ = ["load_scenario", "apply_overrides", "load_yaml"]
@@ -171,9 +174,9 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
     shortest = kind.shortest_duration_s(experiment)   # every case sees every fault
     circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit, shortest,
                                                                valve_settings))
-    check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)
+    air = check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
-    state_limits = _state_limits(data.get("state_limits"), path)
+    state_limits = _state_limits(data.get("state_limits"), path, air)
     checks = parse_checks(data.get("checks", []), kind, experiment, path, common["k_W_per_K"], valve_settings)
     extra = kind.extra_files(experiment)
     return Scenario(**common, files_sha256=_files_read(path, data, extra), experiment=experiment, circuit=circuit,
@@ -302,14 +305,37 @@ def _vehicle(value, file) -> VehicleParams:
     raise ScenarioError(file, ["vehicle"], f"expected a parameter file path or a mapping, got {describe(value)}")
 
 
-def _state_limits(value, file) -> StateLimits:
-    """``state_limits``: the states that stop a case (:class:`~cosim.scenario.model.StateLimits`)."""
+def _state_limits(value, file, air: Sequence[InitialAir] = ()) -> StateLimits:
+    """``state_limits``: the states that stop a case (:class:`~cosim.scenario.model.StateLimits`).
+    A limit the air already passes when the run starts (``air``: every chamber's, in every valve
+    setting) would stop every case at its first step: refused, with the unit it was likely
+    written in (degrees Celsius for K, bar for Pa)."""
     limits = build(StateLimits, value, file, ["state_limits"])
     for low, high in (("T_min_K", "T_max_K"), ("p_min_Pa", "p_max_Pa")):
         if not getattr(limits, low) < getattr(limits, high):
             raise ScenarioError(file, ["state_limits", high], f"must exceed {low} ({getattr(limits, low):g}), "
                                                               f"got {getattr(limits, high):g}")
+    if air:
+        for key, state, unit, upper in (("T_max_K", "T_K", "K", True), ("T_min_K", "T_K", "K", False),
+                                        ("p_max_Pa", "p_Pa", "Pa absolute", True), ("p_min_Pa", "p_Pa", "Pa absolute", False)):
+            _check_limit_admits_start(getattr(limits, key), key, state, unit, upper, air, file)
     return limits
+
+
+def _check_limit_admits_start(limit: float, key: str, state: str, unit: str, upper: bool, air: Sequence[InitialAir],
+                              file) -> None:
+    """An upper (``upper``) or lower state limit ``key`` must leave every chamber's starting
+    ``state`` (``p_Pa`` or ``T_K`` of :class:`InitialAir`) inside it."""
+    start = (max if upper else min)(air, key=lambda a: getattr(a, state))
+    value = getattr(start, state)
+    if (limit > value) if upper else (limit < value):
+        return
+    field = range_of(StateLimits, key)       # the slip must also land within the field's own range
+    start_range = Range(value, field.high, False, True, unit) if upper else Range(field.low, value, False, False, unit)
+    raise ScenarioError(file, ["state_limits", key], f"must be {'above' if upper else 'below'} the air's "
+                                                     f"{'temperature' if state == 'T_K' else 'pressure'} when the run "
+                                                     f"starts ({start.chamber}: {value:.6g} {unit}), or every case "
+                                                     f"stops at its first step; got {limit:g}{unit_slip(limit, start_range)}")
 
 
 def _track_structure(value, file) -> TrackStructure:

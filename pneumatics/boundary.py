@@ -2,8 +2,13 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional
+
+from pneumorail.quantities import ranged
+
+from .chamber import VESSEL_VOLUME
+from .gas import ABSOLUTE_PRESSURE, AIR_TEMPERATURE
 
 
 @dataclass(frozen=True)
@@ -24,9 +29,9 @@ class Supply:
     ``T_K`` None means the atmosphere's temperature.
     """
 
-    p_Pa: float = 9.0e5
-    T_K: Optional[float] = None
-    V_m3: float = math.inf
+    p_Pa: float = field(default=9.0e5, metadata=ranged(ABSOLUTE_PRESSURE))
+    T_K: Optional[float] = field(default=None, metadata=ranged(AIR_TEMPERATURE))
+    V_m3: float = field(default=math.inf, metadata=VESSEL_VOLUME)
 
     @property
     def is_fixed(self) -> bool:

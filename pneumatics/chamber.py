@@ -5,10 +5,24 @@ chambers along the first axis and, optionally, independent cases along a trailin
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional, Tuple
 
 import numpy as np
+
+from pneumorail.quantities import plausible, ranged
+
+from .gas import ABSOLUTE_PRESSURE, AIR_TEMPERATURE
+
+#: ranges of the chambers' fields (metadata). An airspring's effective area: the paper's 0.13 m^2,
+#: the largest rail airsprings ~0.5 m^2 (a value in cm^2 is ~1e4 times too large)
+_AREA = plausible(0.0, 2.0, "m^2", "an airspring's effective area", low_inclusive=False)
+#: an airspring's volume: 1 litre (a small cab airspring) to 1 m^3 (the paper's holds 12 litres,
+#: the largest rail airsprings ~0.1 m^3; a value in litres is 1000 times too large)
+_BELLOW_VOLUME = plausible(1e-3, 1.0, "m^3", "an airspring's volume")
+#: a rigid vessel's volume: 1 litre to 10 m^3 (the paper's auxiliary tank holds 27 litres, a
+#: train's main reservoirs 0.1-1 m^3)
+VESSEL_VOLUME = plausible(1e-3, 10.0, "m^3", "an auxiliary tank or a main reservoir")
 
 
 @dataclass(frozen=True)
@@ -25,14 +39,17 @@ class Bellow:
     not used). Manufacturers give A_e against height; crushing is nominal height minus height.
     """
 
-    V0_m3: float = 0.012
-    dV_dz_m2: float = 0.13
-    A0_m2: float = 0.13
-    dA_dz_m: float = 0.0
-    p0_Pa: Optional[float] = None
-    T0_K: Optional[float] = None
-    area_table_z_m: Tuple[float, ...] = ()
-    area_table_m2: Tuple[float, ...] = ()
+    V0_m3: float = field(default=0.012, metadata=_BELLOW_VOLUME)
+    # the volume gradient is about the effective area (Table 1: both 0.13 m^2)
+    dV_dz_m2: float = field(default=0.13, metadata=_AREA)
+    A0_m2: float = field(default=0.13, metadata=_AREA)
+    # +-10 m: the area changing by 0.1 m^2 (most of it) over 10 mm of crushing
+    dA_dz_m: float = field(default=0.0, metadata=plausible(-10.0, 10.0, "m", "change of effective area with crushing, "
+                                                                              "either sign"))
+    p0_Pa: Optional[float] = field(default=None, metadata=ranged(ABSOLUTE_PRESSURE))
+    T0_K: Optional[float] = field(default=None, metadata=ranged(AIR_TEMPERATURE))
+    area_table_z_m: Tuple[float, ...] = field(default=(), metadata=plausible(-0.5, 0.5, "m", "crushing from the static height"))
+    area_table_m2: Tuple[float, ...] = field(default=(), metadata=_AREA)
 
     def volume_m3(self, z_m):
         return self.V0_m3 - self.dV_dz_m2 * z_m
@@ -59,9 +76,9 @@ class Bellow:
 class Tank:
     """A rigid chamber (auxiliary tank, or a finite main reservoir). Table 1: 27 dm^3."""
 
-    V_m3: float = 0.027
-    p0_Pa: Optional[float] = None
-    T0_K: Optional[float] = None
+    V_m3: float = field(default=0.027, metadata=VESSEL_VOLUME)
+    p0_Pa: Optional[float] = field(default=None, metadata=ranged(ABSOLUTE_PRESSURE))
+    T0_K: Optional[float] = field(default=None, metadata=ranged(AIR_TEMPERATURE))
 
 
 def bellow_force_N(A_e_m2, p_Pa, p_atm_Pa):

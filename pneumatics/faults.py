@@ -38,10 +38,13 @@ Air that leaves through a fault's opening is counted apart from the air the valv
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional
 
+from pneumorail.quantities import nonnegative, plausible, ranged
+
 from .gas import AIR, T_REF_K, Gas
+from .orifice import CRITICAL_RATIO
 
 #: fault kind -> what it needs besides the component and the time
 FAULT_KINDS = ("burst", "leak", "blocked", "ruptured", "stuck_closed", "stuck_open", "stuck_at", "supply_lost")
@@ -61,12 +64,15 @@ class Fault:
 
     kind: str
     component: str
-    t_s: float = 0.0
-    area_m2: Optional[float] = None
-    C_m3_per_sPa: Optional[float] = None
-    b_critical: Optional[float] = None
+    t_s: float = field(default=0.0, metadata=ranged(nonnegative("s", "when the fault happens; 0: from the start")))
+    area_m2: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 0.1, "m^2", "an opening's effective area (a bellow's is ~0.13 m^2)", low_inclusive=False))
+    C_m3_per_sPa: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 1e-4, "m^3/(s Pa)", "an ISO 6358 sonic conductance", low_inclusive=False))
+    b_critical: Optional[float] = field(default=None, metadata=ranged(CRITICAL_RATIO))
     side: Optional[str] = None
-    lever_m: Optional[float] = None
+    lever_m: Optional[float] = field(default=None, metadata=plausible(
+        -0.2, 0.2, "m", "a levelling valve's lever displacement (+ opens the supply side)"))
 
     def label(self) -> str:
         """A short description for summary rows and figure titles: ``FL burst 1 cm² at 2 s``."""

@@ -2,9 +2,11 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+
+from pneumorail.quantities import Range, ranged
 
 from .compiled import elementwise, scalar
 from .gas import AIR, T_REF_K, Gas
@@ -16,6 +18,10 @@ from .gas import AIR, T_REF_K, Gas
 LAMINAR_RATIO = 1e-3
 
 
+#: the range of an ISO 6358 critical pressure ratio b (field metadata): a pressure ratio below 1
+CRITICAL_RATIO = Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio")
+
+
 @dataclass(frozen=True)
 class Orifice:
     """A fixed restriction between two nodes: sonic conductance C [m^3/(s Pa)] and critical ratio b."""
@@ -23,7 +29,7 @@ class Orifice:
     a: str
     b: str
     C_m3_per_sPa: float
-    b_critical: float = 0.5
+    b_critical: float = field(default=0.5, metadata=ranged(CRITICAL_RATIO))
 
 
 @scalar

@@ -6,9 +6,11 @@ other way (from port 2 to port 1); the physics is the same.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+
+from pneumorail.quantities import nonnegative, plausible, positive, ranged
 
 from .compiled import elementwise
 
@@ -24,10 +26,10 @@ class Pipe:
 
     a: str
     b: str
-    length_m: float = 1.0
-    diameter_m: float = 0.018
-    friction_factor: float = 0.0
-    zeta: float = 1.11
+    length_m: float = field(default=1.0, metadata=ranged(positive("m")))
+    diameter_m: float = field(default=0.018, metadata=plausible(0.0, 0.3, "m", "a pneumatic pipe's bore", low_inclusive=False))
+    friction_factor: float = field(default=0.0, metadata=ranged(nonnegative(why="Darcy friction factor lambda")))
+    zeta: float = field(default=1.11, metadata=ranged(nonnegative(why="pressure-loss coefficient of fittings")))
     model: str = "dynamic"
 
     @property

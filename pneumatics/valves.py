@@ -17,18 +17,27 @@ circuit (:mod:`pneumatics.circuit`) holds their states.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Tuple
 
 import numpy as np
 from scipy.special import gammainc
 
+from pneumorail.quantities import nonnegative, plausible, ranged
+
 from .compiled import arrays
+from .orifice import CRITICAL_RATIO
 
 #: Sonic conductance of a fully open levelling valve [m^3/(s Pa)]. Assumed: a large railway
 #: levelling valve passes about 1000 l/min ANR, ~0.02 kg/s choked from a 9 bar reservoir, i.e.
 #: C ~ 2e-8; half of that is taken, for a valve whose lever is not fully deflected in normal service.
 LEVELLING_C_MAX = 1.0e-8
+#: ranges of the valves' tables (field metadata): a lever displacement from 0 to 1 m (the safety
+#: valve's never-opening supply side is tabled to 1 m; an airspring's whole stroke is ~0.1 m);
+#: a sonic conductance from 0 (the dead band: shut) to 1e-4 m^3/(s Pa), 10 000 times the
+#: levelling valve's, a bore of ~7 cm (C = 1.99e-3 A)
+LEVER_TABLE = plausible(0.0, 1.0, "m", "a lever displacement from the valve's neutral")
+CONDUCTANCE_TABLE = plausible(0.0, 1e-4, "m^3/(s Pa)", "a sonic conductance; 0: shut")
 
 
 @dataclass(frozen=True)
@@ -92,16 +101,18 @@ class LevellingValve:
     supply: str = "supply"
     exhaust: str = "atmosphere"
     sensed: Tuple[str, ...] = ()
-    lever_gain: float = 1.0
-    supply_lever_m: Tuple[float, ...] = (0.0, 0.005, 0.025)
-    supply_C_m3_per_sPa: Tuple[float, ...] = (0.0, 0.0, LEVELLING_C_MAX)
-    exhaust_lever_m: Tuple[float, ...] = (0.0, 0.005, 0.025)
-    exhaust_C_m3_per_sPa: Tuple[float, ...] = (0.0, 0.0, LEVELLING_C_MAX)
-    b_critical: float = 0.4
-    lag_s: float = 0.0
-    delay_s: float = 0.0
-    delay_stages: int = 16
-    hysteresis_m: float = 0.0
+    lever_gain: float = field(default=1.0, metadata=plausible(0.0, 20.0, why="lever displacement per metre of crushing, "
+                                                                             "a lever ratio", low_inclusive=False))
+    supply_lever_m: Tuple[float, ...] = field(default=(0.0, 0.005, 0.025), metadata=LEVER_TABLE)
+    supply_C_m3_per_sPa: Tuple[float, ...] = field(default=(0.0, 0.0, LEVELLING_C_MAX), metadata=CONDUCTANCE_TABLE)
+    exhaust_lever_m: Tuple[float, ...] = field(default=(0.0, 0.005, 0.025), metadata=LEVER_TABLE)
+    exhaust_C_m3_per_sPa: Tuple[float, ...] = field(default=(0.0, 0.0, LEVELLING_C_MAX), metadata=CONDUCTANCE_TABLE)
+    b_critical: float = field(default=0.4, metadata=ranged(CRITICAL_RATIO))
+    lag_s: float = field(default=0.0, metadata=ranged(nonnegative("s", "0: no lag")))
+    delay_s: float = field(default=0.0, metadata=ranged(nonnegative("s", "0: no delay")))
+    delay_stages: int = field(default=16, metadata=plausible(1, 1000, why="first-order stages approximating the delay; "
+                                                                           "one state each"))
+    hysteresis_m: float = field(default=0.0, metadata=plausible(0.0, 0.05, "m", "the lever's play; 0: no play"))
 
     @property
     def sensed_bellows(self) -> Tuple[str, ...]:
@@ -117,10 +128,10 @@ class SafetyValve(LevellingValve):
     """
 
     supply: str = "atmosphere"
-    supply_lever_m: Tuple[float, ...] = (0.0, 1.0)
-    supply_C_m3_per_sPa: Tuple[float, ...] = (0.0, 0.0)
-    exhaust_lever_m: Tuple[float, ...] = (0.0, 0.060, 0.080)
-    exhaust_C_m3_per_sPa: Tuple[float, ...] = (0.0, 0.0, 2.0 * LEVELLING_C_MAX)
+    supply_lever_m: Tuple[float, ...] = field(default=(0.0, 1.0), metadata=LEVER_TABLE)
+    supply_C_m3_per_sPa: Tuple[float, ...] = field(default=(0.0, 0.0), metadata=CONDUCTANCE_TABLE)
+    exhaust_lever_m: Tuple[float, ...] = field(default=(0.0, 0.060, 0.080), metadata=LEVER_TABLE)
+    exhaust_C_m3_per_sPa: Tuple[float, ...] = field(default=(0.0, 0.0, 2.0 * LEVELLING_C_MAX), metadata=CONDUCTANCE_TABLE)
 
 
 @dataclass(frozen=True)
@@ -134,8 +145,11 @@ class DifferentialPressureValve:
 
     a: str
     b: str
-    dp_Pa: Tuple[float, ...] = (0.0, 1.5e5, 2.5e5)
-    q_kg_per_s: Tuple[float, ...] = (0.0, 0.0, 0.02)
+    # a pressure difference, not an absolute pressure: from 0; 20 bar is beyond any railway circuit
+    dp_Pa: Tuple[float, ...] = field(default=(0.0, 1.5e5, 2.5e5), metadata=plausible(
+        0.0, 2e6, "Pa", "a pressure difference across the valve"))
+    # 0.02 kg/s is the default's full flow; 10 kg/s would empty a 12-litre bellow at 5 bar in ms
+    q_kg_per_s: Tuple[float, ...] = field(default=(0.0, 0.0, 0.02), metadata=plausible(0.0, 10.0, "kg/s", "a valve's flow"))
 
 
 @arrays

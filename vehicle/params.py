@@ -35,7 +35,9 @@ orders of magnitude, not the data of one particular vehicle.
 """
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+from pneumorail.quantities import plausible, positive, ranged
 
 #: Bellows (airsprings): front/rear bogie, left/right in the running direction.
 BELLOWS = ("FL", "FR", "RL", "RR")
@@ -58,75 +60,97 @@ WHEELSETS = tuple(dict.fromkeys(wheel[:-1] for wheel in WHEELS))
 FLOOR_POINTS = ("front", "centre", "rear")
 
 
+#: ranges of the vehicle parameters (field metadata, :mod:`pneumorail.quantities`): every parameter is
+#: a mass, inertia, length, height above rail, stiffness, damping or clearance, none negative (0: the
+#: component is absent); the geometry and masses within what rail vehicles have, from a tram module
+#: to a loaded locomotive, so that a value typed in the wrong unit (tonnes, millimetres) is refused
+#: with the slip named. Stiffnesses and dampings: 0 (absent) or inf (rigid), else within what
+#: suspension elements have; a value in kN/m or kN s/m typed as N/m is a thousand times too small.
+_HEIGHT = plausible(0.0, 5.0, "m", "a height above the rail top")
+_FREE_TRAVEL = plausible(0.0, 0.3, "m", "a bumpstop's free travel")
+_SPRING = plausible(1e3, 1e10, "N/m", "a spring", zero_or_inf=True)
+_DAMPER = plausible(10.0, 1e7, "N s/m", "a damper", zero_or_inf=True)
+_TORSION = plausible(1e3, 1e9, "N m/rad", "a torsion spring", zero_or_inf=True)
+_PRIMARY_SPRING = plausible(1e3, 1e10, "N/m", "a primary spring")
+
+
+def _inertia(body: str):
+    """The range of an inertia of ``body`` (field metadata)."""
+    return plausible(1.0, 1e8, "kg m^2", f"a {body}'s inertia", low_inclusive=False)
+
+
 @dataclass(frozen=True)
 class VehicleParams:
     """Metro car: one carbody, two bogie frames, four wheelsets; purely pneumatic secondary."""
 
     # --- masses (paper Table 3) ---
-    carbody_mass_kg: float = 17000.0  # Table 3
-    bogie_mass_kg: float = 1900.0  # Table 3 (bogie frame)
-    wheelset_mass_kg: float = 800.0  # Table 3
+    carbody_mass_kg: float = field(default=17000.0, metadata=plausible(2000.0, 150000.0, "kg", "a carbody"))  # Table 3
+    # Table 3 (bogie frame)
+    bogie_mass_kg: float = field(default=1900.0, metadata=plausible(200.0, 20000.0, "kg", "a bogie frame"))
+    wheelset_mass_kg: float = field(default=800.0, metadata=plausible(100.0, 5000.0, "kg", "a wheelset"))  # Table 3
 
     # --- geometry ---
-    bogie_centre_distance_m: float = 10.0  # Table 3
-    wheelbase_m: float = 2.0  # Table 3
+    # Table 3
+    bogie_centre_distance_m: float = field(default=10.0, metadata=plausible(2.0, 40.0, "m", "between the bogie centres"))
+    wheelbase_m: float = field(default=2.0, metadata=plausible(1.0, 5.0, "m", "a bogie's wheelbase"))  # Table 3
     # Nominal lateral distance of the two wheel-rail contact points, standard gauge 1435 mm.
-    contact_spacing_m: float = 1.5
+    contact_spacing_m: float = field(default=1.5, metadata=plausible(0.9, 1.8, "m", "between the wheels' contact points, "
+                                                                                    "gauges 1000-1676 mm"))
     # 840 mm tread diameter: usual for metro cars (Manchester mainline vehicle: 0.46 m).
-    wheel_radius_m: float = 0.42
+    wheel_radius_m: float = field(default=0.42, metadata=plausible(0.15, 0.8, "m", "a wheel's rolling radius"))
     # Axlebox (primary spring) lateral spacing: Manchester 2 x 1.0 m, typical of 1435 mm bogies.
-    primary_lateral_spacing_m: float = 2.0
+    primary_lateral_spacing_m: float = field(default=2.0, metadata=plausible(0.5, 4.0, "m", "across the car"))
     # Airspring lateral spacing: Manchester secondary 2 x 1.0 m; metro bogies use 1.8-2.0 m.
-    airspring_lateral_spacing_m: float = 2.0
+    airspring_lateral_spacing_m: float = field(default=2.0, metadata=plausible(0.5, 4.0, "m", "across the car"))
     # Bellow lower plate (on the bogie frame) above rail top at static equilibrium: top of a
     # metro bogie frame side beam, ~0.8 m.
-    airspring_lower_height_m: float = 0.80
+    airspring_lower_height_m: float = field(default=0.80, metadata=_HEIGHT)
     # Bellow upper plate (on the carbody) above rail top at static equilibrium: 0.25 m nominal
     # bellow height, typical of metro airsprings (0.2-0.3 m), under a ~1.1 m floor.
-    airspring_upper_height_m: float = 1.05
+    airspring_upper_height_m: float = field(default=1.05, metadata=_HEIGHT)
 
     # Floor above rail top, where the floor accelerations are measured (EN 12299 places its
     # measuring points on the floor above the bogie centres and at the car centre): ~1.1 m on
     # metro cars, just above the bellows' upper plates.
-    floor_height_m: float = 1.1
+    floor_height_m: float = field(default=1.1, metadata=_HEIGHT)
 
     # --- centres of gravity above rail top at static equilibrium ---
     # Low-floor-ish metro carbody (floor ~1.1 m, roof ~3.6 m): CoG ~1.5 m (Manchester: 2.0 m).
-    carbody_cog_height_m: float = 1.5
+    carbody_cog_height_m: float = field(default=1.5, metadata=_HEIGHT)
     # Bogie frame CoG between axle height (0.42 m) and airspring seat (0.8 m).
-    bogie_cog_height_m: float = 0.6
+    bogie_cog_height_m: float = field(default=0.6, metadata=_HEIGHT)
 
     # --- inertias about the body CoG, body axes x forward, y left, z up ---
     # Manchester carbody (32 t): 56.8 / 1970 / 1970 t m^2. Roll scaled with mass (x 0.531);
     # pitch and yaw also with (10/19)^2 = 0.277: 30 200 / 290 000 / 290 000 kg m^2.
-    carbody_inertia_xx_kg_m2: float = 30.2e3
-    carbody_inertia_yy_kg_m2: float = 290.0e3
-    carbody_inertia_zz_kg_m2: float = 290.0e3
+    carbody_inertia_xx_kg_m2: float = field(default=30.2e3, metadata=_inertia("carbody"))
+    carbody_inertia_yy_kg_m2: float = field(default=290.0e3, metadata=_inertia("carbody"))
+    carbody_inertia_zz_kg_m2: float = field(default=290.0e3, metadata=_inertia("carbody"))
     # Manchester bogie frame (2615 kg): 1722 / 1476 / 3067 kg m^2; mass ratio 0.727, pitch also
     # x (2.0/2.56)^2 = 0.61; yaw ~ roll + pitch for a flat frame.
-    bogie_inertia_xx_kg_m2: float = 1250.0
-    bogie_inertia_yy_kg_m2: float = 650.0
-    bogie_inertia_zz_kg_m2: float = 1900.0
+    bogie_inertia_xx_kg_m2: float = field(default=1250.0, metadata=_inertia("bogie"))
+    bogie_inertia_yy_kg_m2: float = field(default=650.0, metadata=_inertia("bogie"))
+    bogie_inertia_zz_kg_m2: float = field(default=1900.0, metadata=_inertia("bogie"))
     # Manchester wheelset (1813 kg): 1120 / 112 / 1120 kg m^2, scaled with mass (x 0.441).
-    wheelset_inertia_xx_kg_m2: float = 494.0
-    wheelset_inertia_yy_kg_m2: float = 49.0
-    wheelset_inertia_zz_kg_m2: float = 494.0
+    wheelset_inertia_xx_kg_m2: float = field(default=494.0, metadata=_inertia("wheelset"))
+    wheelset_inertia_yy_kg_m2: float = field(default=49.0, metadata=_inertia("wheelset"))
+    wheelset_inertia_zz_kg_m2: float = field(default=494.0, metadata=_inertia("wheelset"))
 
     # --- primary suspension, per axlebox, acting in the bogie frame ---
     # Manchester per axlebox: kx 31.39 MN/m, ky 3.884 MN/m, kz 1.22 MN/m, cz 4 kN s/m;
     # scaled by the axlebox-load ratio 0.558 (same static deflection ~37 mm).
-    primary_stiffness_x_N_per_m: float = 17.5e6
-    primary_stiffness_y_N_per_m: float = 2.17e6
-    primary_stiffness_z_N_per_m: float = 0.68e6
-    primary_damping_x_N_s_per_m: float = 0.0  # Manchester: no longitudinal primary damper
-    primary_damping_y_N_s_per_m: float = 0.0  # Manchester: no lateral primary damper
-    primary_damping_z_N_s_per_m: float = 2.2e3  # Manchester 4 kN s/m x 0.558
+    primary_stiffness_x_N_per_m: float = field(default=17.5e6, metadata=_PRIMARY_SPRING)
+    primary_stiffness_y_N_per_m: float = field(default=2.17e6, metadata=_PRIMARY_SPRING)
+    primary_stiffness_z_N_per_m: float = field(default=0.68e6, metadata=_PRIMARY_SPRING)
+    primary_damping_x_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)  # Manchester: no longitudinal primary damper
+    primary_damping_y_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)  # Manchester: no lateral primary damper
+    primary_damping_z_N_s_per_m: float = field(default=2.2e3, metadata=_DAMPER)  # Manchester 4 kN s/m x 0.558
 
     # --- secondary suspension (pneumatic; vertical force comes from the pneumatic model) ---
     # Shear (horizontal) stiffness of one bellow, x and y: metro airsprings 100-150 kN/m at
     # ~3 bar gauge (Manchester secondary lateral: 160 kN/m per side). No traction rod is
     # modelled: the shear stiffness also holds the carbody longitudinally (stationary tests).
-    bellow_shear_stiffness_N_per_m: float = 120.0e3
+    bellow_shear_stiffness_N_per_m: float = field(default=120.0e3, metadata=_SPRING)
     # Lateral bumpstops (one per bogie: carbody centre pivot against stops on the bogie frame).
     # Clearance (reasoning, no published value for this car): airspring bogies typically leave
     # +-30...40 mm of free lateral secondary travel; at the paper's 1 m/s^2 unbalanced lateral
@@ -136,21 +160,22 @@ class VehicleParams:
     # and catches larger excursions (no lateral dampers in this car).
     # Stiffness: order of the initial rate of a rubber bumpstop, ~1 MN/m (real stops are
     # progressive; linear past the clearance is the usual simplification).
-    lateral_bumpstop_clearance_m: float = 0.040
-    lateral_bumpstop_stiffness_N_per_m: float = 1.0e6
+    lateral_bumpstop_clearance_m: float = field(default=0.040, metadata=_FREE_TRAVEL)
+    lateral_bumpstop_stiffness_N_per_m: float = field(default=1.0e6, metadata=_SPRING)
 
     # --- wheel-rail vertical contact, Q = C_H * delta^1.5 (+ damping, never pulling) ---
     # Hertz with the equivalent-sphere approximation (wheel R 0.42 m on a 0.3 m rail crown,
     # E 210 GPa, nu 0.28) gives 0.9e11; the empirical G = 3.86e-8 R^-0.115 m/N^(2/3)
     # (Zhai, Vehicle-track coupled dynamics) gives 1.13e11. Round value in between. The
     # static deflection is ~40 um, far below the primary's ~37 mm: Q is insensitive to C_H.
-    hertz_constant_N_per_m1_5: float = 1.0e11
+    hertz_constant_N_per_m1_5: float = field(default=1.0e11, metadata=ranged(positive("N/m^1.5")))
     # Light damping of the ~250 Hz wheelset-on-contact bounce mode (damping ratio ~0.04),
     # the order of a rail pad's damping; the force is clipped so the contact never pulls.
-    contact_damping_N_s_per_m: float = 5.0e4
+    contact_damping_N_s_per_m: float = field(default=5.0e4, metadata=_DAMPER)
 
     # --- environment ---
-    gravity_m_per_s2: float = 9.81  # standard gravity, rounded as in most vehicle codes
+    # standard gravity, rounded as in most vehicle codes
+    gravity_m_per_s2: float = field(default=9.81, metadata=plausible(9.7, 9.9, "m/s^2", "gravity on the Earth's surface"))
 
     # ================================================================ optional components
     # All off by default (the paper's car has none). Typical values: metro_car_arb_dampers().
@@ -160,75 +185,75 @@ class VehicleParams:
     # torsion bar with its geometry: k = k_t (link spacing / lever arm)^2 (not both).
     # Air-sprung passenger cars: of order 1 MN m/rad per bogie [I, KS]; it sets the roll
     # coefficient, indispensable with a two-point (cross-connected) air suspension.
-    arb_roll_stiffness_N_m_per_rad: float = 0.0
+    arb_roll_stiffness_N_m_per_rad: float = field(default=0.0, metadata=_TORSION)
     # Torsion-bar stiffness G pi d^4 / (32 L): e.g. d = 50 mm, L = 1.8 m, G = 80 GPa: 27 kN m/rad.
-    arb_torsion_stiffness_N_m_per_rad: float = 0.0
+    arb_torsion_stiffness_N_m_per_rad: float = field(default=0.0, metadata=_TORSION)
     # Lever (crank) arm from the bar's axis to the link joint, typically 0.25-0.4 m.
-    arb_lever_arm_m: float = 0.0
+    arb_lever_arm_m: float = field(default=0.0, metadata=plausible(0.0, 2.0, "m", "the bar's lever; 0: no bar"))
     # Lateral distance between the two vertical links, ~ the airspring spacing (1.8-2.2 m).
-    arb_link_spacing_m: float = 0.0
+    arb_link_spacing_m: float = field(default=0.0, metadata=plausible(0.0, 4.0, "m", "across the car; 0: no bar"))
 
     # --- secondary vertical dampers: two per bogie, at +-spacing/2, vertical ---
     # Each a (bi)linear damper in series with its mounting (rubber end bushes), see
     # vehicle/suspension.py. Damping per damper: 10-40 kN s/m on air-sprung passenger
     # vehicles [I]; Manchester benchmark 20 kN s/m on a 32 t body [M].
-    secondary_vertical_damping_N_s_per_m: float = 0.0
+    secondary_vertical_damping_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)
     # Blow-off (relief valve opening) velocity v_b; beyond it the slope is the blow-off
     # damping. Typical knees 0.05-0.2 m/s, slopes beyond 10-50 % of the first [I]. inf: linear.
     secondary_vertical_damper_blowoff_velocity_m_per_s: float = math.inf
-    secondary_vertical_damper_blowoff_damping_N_s_per_m: float = 0.0
+    secondary_vertical_damper_blowoff_damping_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)
     # Series (mounting) stiffness: end bushes and oil compressibility, of order 1-10 MN/m [I].
     # inf: rigid mounting (a plain damper).
-    secondary_vertical_damper_series_stiffness_N_per_m: float = math.inf
+    secondary_vertical_damper_series_stiffness_N_per_m: float = field(default=math.inf, metadata=_SPRING)
     # Lateral spacing of the two vertical dampers: next to the airsprings (here 2.0 m).
-    secondary_vertical_damper_lateral_spacing_m: float = 2.0
+    secondary_vertical_damper_lateral_spacing_m: float = field(default=2.0, metadata=plausible(0.0, 4.0, "m", "across the car"))
 
     # --- secondary lateral damper: one per bogie, at the bogie centre, lateral ---
     # 15-40 kN s/m on passenger vehicles [I]; same law and parameters as the vertical ones.
-    secondary_lateral_damping_N_s_per_m: float = 0.0
+    secondary_lateral_damping_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)
     secondary_lateral_damper_blowoff_velocity_m_per_s: float = math.inf
-    secondary_lateral_damper_blowoff_damping_N_s_per_m: float = 0.0
-    secondary_lateral_damper_series_stiffness_N_per_m: float = math.inf
+    secondary_lateral_damper_blowoff_damping_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)
+    secondary_lateral_damper_series_stiffness_N_per_m: float = field(default=math.inf, metadata=_SPRING)
     # Height above rail: between the frame's side beams and the carbody underframe, ~0.9 m.
-    secondary_lateral_damper_height_m: float = 0.9
+    secondary_lateral_damper_height_m: float = field(default=0.9, metadata=_HEIGHT)
 
     # --- yaw dampers: two per bogie, longitudinal, at +-spacing/2 ---
     # Against bogie hunting at speed: high-speed cars use a few hundred kN s/m with blow-off
     # at ~0.01-0.02 m/s and 5-10 MN/m series stiffness [I, KS]; metro cars (<= 100 km/h)
     # usually have none (e.g. doi:10.1007/s40864-016-0045-x).
-    yaw_damping_N_s_per_m: float = 0.0
+    yaw_damping_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)
     yaw_damper_blowoff_velocity_m_per_s: float = math.inf
-    yaw_damper_blowoff_damping_N_s_per_m: float = 0.0
-    yaw_damper_series_stiffness_N_per_m: float = math.inf
+    yaw_damper_blowoff_damping_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)
+    yaw_damper_series_stiffness_N_per_m: float = field(default=math.inf, metadata=_SPRING)
     # Mounted outside the frame's side beams: 2.5-2.8 m apart.
-    yaw_damper_lateral_spacing_m: float = 2.6
+    yaw_damper_lateral_spacing_m: float = field(default=2.6, metadata=plausible(0.0, 4.0, "m", "across the car"))
     # Height above rail, near the bogie frame's side beam top.
-    yaw_damper_height_m: float = 0.8
+    yaw_damper_height_m: float = field(default=0.8, metadata=_HEIGHT)
 
     # --- traction rod (or centre pivot), one per bogie: longitudinal, at the bogie centre ---
     # Longitudinal stiffness of the rod's rubber bushes, 5-20 MN/m [I]. 0: none (the bellows'
     # shear then holds the carbody longitudinally, as in the paper's car).
-    traction_rod_stiffness_N_per_m: float = 0.0
+    traction_rod_stiffness_N_per_m: float = field(default=0.0, metadata=_SPRING)
     # Damping of the bushes; rubber loss factor ~0.1 at the ~5 Hz carbody-on-rods mode gives
     # c = 0.1 k / omega ~ 30 kN s/m for 10 MN/m.
-    traction_rod_damping_N_s_per_m: float = 0.0
+    traction_rod_damping_N_s_per_m: float = field(default=0.0, metadata=_DAMPER)
     # Height above rail of the rod: low traction rods (0.4-0.6 m) limit the load transfer
     # between wheelsets under traction and braking.
-    traction_rod_height_m: float = 0.5
+    traction_rod_height_m: float = field(default=0.5, metadata=_HEIGHT)
 
     # --- emergency spring and vertical bumpstop, per bellow ---
     # Emergency (auxiliary) rubber spring in series with the bellow: it carries the load always
     # and alone, through the bumpstop, when the bellow is deflated or bottoms. Laminated rubber
     # emergency springs: ~1-3 MN/m vertical, several times the bellow's stiffness [I]. inf: none
     # (the bellow sits on a rigid seat, as in the paper's car).
-    emergency_spring_stiffness_N_per_m: float = math.inf
+    emergency_spring_stiffness_N_per_m: float = field(default=math.inf, metadata=_SPRING)
     # Internal bumpstop of the bellow, in parallel with it: engages when the bellow's own
     # crushing exceeds the clearance (measured from the static height). Typical free travel
     # 30-60 mm [I]; the stop then rests on the emergency spring.
-    vertical_bumpstop_clearance_m: float = 0.04
+    vertical_bumpstop_clearance_m: float = field(default=0.04, metadata=_FREE_TRAVEL)
     # Stop stiffness (rubber pad on the emergency spring's top plate): stiffer than the
     # emergency spring, ~10 MN/m. 0: no stop.
-    vertical_bumpstop_stiffness_N_per_m: float = 0.0
+    vertical_bumpstop_stiffness_N_per_m: float = field(default=0.0, metadata=_SPRING)
 
     @property
     def bogie_x_m(self) -> tuple:
@@ -249,6 +274,14 @@ class VehicleParams:
         return tuple(xb + sign * a for xb in self.bogie_x_m for sign in (1.0, -1.0))
 
 
+#: ranges of the contact's parameters (field metadata; also of the scenario keys that set them):
+#: the table's smoothing, a friction coefficient (above 1 no rail, dry or wet, grips), the normal
+#: damping (the shipped 2e5 stands in for the track's; 1e7 N s/m overdamps the contact's modes)
+TABLE_SMOOTHING = plausible(0.0, 1.0, "mm", "0: the rigid table; 1 mm blurs the flange itself")
+FRICTION = plausible(0.0, 1.0, why="a wheel-rail friction coefficient; dry rail 0.3-0.5", low_inclusive=False)
+CONTACT_DAMPING = plausible(0.0, 1e7, "N s/m", "the shipped 2e5 stands in for the track's damping")
+
+
 @dataclass(frozen=True)
 class ContactParams:
     """Wheel-rail contact of :class:`~vehicle.car.MetroCar` with ``guidance="contact"`` (issue
@@ -267,7 +300,7 @@ class ContactParams:
     # Wheel-rail friction coefficient mu: the creep forces saturate at mu N. 0.36 is the value
     # the issue's Nadal limit uses (70 deg flange, mu 0.36: Y/Q 1.20); dry rail 0.3-0.5, wet
     # 0.15-0.25 (Iwnicki, Handbook of Railway Vehicle Dynamics, ch. "Wheel-rail contact").
-    friction_coefficient: float = 0.36
+    friction_coefficient: float = field(default=0.36, metadata=FRICTION)
     # Creepages are slip velocities divided by the running speed V; below this speed they are
     # divided by it instead, so that the car can stand (V = 0, the twist test) or start: the
     # creep forces then act as viscous forces f_ij / V_min on the slip velocities (for a 30 kN
@@ -293,12 +326,12 @@ class ContactParams:
     # flanging wheelset's eigenvalues reach +82 /s (vehicle/wheelrail/stability.py), which at
     # 5 ms steps only the integrator's numerical damping hid (docs/wheel_rail.md, "Flange
     # contact and step convergence").
-    normal_damping_N_s_per_m: float = 2.0e5
+    normal_damping_N_s_per_m: float = field(default=2.0e5, metadata=CONTACT_DAMPING)
     # Gaussian smoothing of the contact table the force law reads, standard deviation in mm of
     # wheelset lateral displacement (vehicle.wheelrail.contact_law.ContactLawTable: the rigid
     # table's jumps and its fast turn across the conformal flange root, smoothed as an elastic
     # contact spreads over them). 0 reads the rigid table as it is.
-    table_smoothing_mm: float = 0.1
+    table_smoothing_mm: float = field(default=0.1, metadata=TABLE_SMOOTHING)
     # Contact table: a CSV written by vehicle.wheelrail.ContactTable.to_csv; "" = the S1002 /
     # UIC60 1:40 / 1435 mm table for the car's wheel radius (shipped for 0.42 m and 0.46 m,
     # vehicle/wheelrail/data, else derived from the profiles in ~2 s).
@@ -319,6 +352,17 @@ class ContactParams:
             raise ValueError(f"flange_angle_rad must lie in (0, pi/2), got {self.flange_angle_rad}")
 
 
+#: ranges of a flexible track's fields (metadata; a rigid track has none), per wheelset (both
+#: rails), around :func:`slab_track`'s values: the mass that moves with a wheelset, from the rails
+#: alone (~60 kg/m each) to a concrete slab (1520 kg), with its roll inertia; support stiffnesses
+#: of soft ballast (~10 MN/m) to a stiff slab (~1 GN/m); dampings of rail pads and ballast (tens to
+#: hundreds of kN s/m). A value in tonnes, MN/m or kN s/m falls out, and the slip is named
+_TRACK_MASS = plausible(20.0, 2e4, "kg", "a track mass per wheelset, rails to slab")
+_TRACK_INERTIA = plausible(1.0, 1e5, "kg m^2", "a track mass's roll inertia")
+_TRACK_STIFFNESS = plausible(1e6, 1e10, "N/m", "a track's support per wheelset, soft ballast to slab")
+_TRACK_DAMPING = plausible(1e3, 1e7, "N s/m", "a track's damping per wheelset")
+_TRACK_ROLL_STIFFNESS = plausible(1e5, 1e10, "N m/rad", "a track's roll support per wheelset")
+_TRACK_ROLL_DAMPING = plausible(1e2, 1e8, "N m s/rad", "a track's roll damping per wheelset")
 #: track models of :class:`TrackStructure`
 TRACK_MODELS = ("rigid", "flexible")
 
@@ -336,14 +380,14 @@ class TrackStructure:
     Values and sources: :func:`slab_track`."""
 
     model: str = "rigid"
-    mass_kg: float = 0.0
-    roll_inertia_kg_m2: float = 0.0
-    lateral_stiffness_N_per_m: float = 0.0
-    lateral_damping_N_s_per_m: float = 0.0
-    vertical_stiffness_N_per_m: float = 0.0
-    vertical_damping_N_s_per_m: float = 0.0
-    roll_stiffness_N_m_per_rad: float = 0.0
-    roll_damping_N_m_s_per_rad: float = 0.0
+    mass_kg: float = field(default=0.0, metadata=_TRACK_MASS)
+    roll_inertia_kg_m2: float = field(default=0.0, metadata=_TRACK_INERTIA)
+    lateral_stiffness_N_per_m: float = field(default=0.0, metadata=_TRACK_STIFFNESS)
+    lateral_damping_N_s_per_m: float = field(default=0.0, metadata=_TRACK_DAMPING)
+    vertical_stiffness_N_per_m: float = field(default=0.0, metadata=_TRACK_STIFFNESS)
+    vertical_damping_N_s_per_m: float = field(default=0.0, metadata=_TRACK_DAMPING)
+    roll_stiffness_N_m_per_rad: float = field(default=0.0, metadata=_TRACK_ROLL_STIFFNESS)
+    roll_damping_N_m_s_per_rad: float = field(default=0.0, metadata=_TRACK_ROLL_DAMPING)
 
     def __post_init__(self):
         if self.model not in TRACK_MODELS:

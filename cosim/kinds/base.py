@@ -120,6 +120,11 @@ class Kind(ABC):
         scans); None: it can."""
         return None
 
+    def refuse_zone(self, metric: str, zone: str, experiment: Any) -> Optional[str]:
+        """Why ``metric`` has no value in test zone ``zone`` of the experiment's track (e.g. a
+        quasi-static value, assessed in tight arcs only, on the straight); None: it has one."""
+        return None
+
     def zones(self, experiment: Any) -> Tuple[str, ...]:
         """The test zones of the experiment's track (kinds with ``zone_metrics``)."""
         return ()

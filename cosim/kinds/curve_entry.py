@@ -53,6 +53,16 @@ def refuse_check(metric: str, curve: CurveTest) -> Optional[str]:
     return None
 
 
+def refuse_zone(metric: str, zone: str, curve: CurveTest) -> Optional[str]:
+    """Why ``checks`` cannot name ``metric`` in ``zone`` (None: it can): EN 14363 assesses the
+    quasi-static values in the arcs R < 600 m only."""
+    if metric in en14363.QUASI_STATIC and zone not in en14363.CURVE_ZONES:
+        curves = [z for z in zones(curve) if z in en14363.CURVE_ZONES]
+        return (f"{metric} is a quasi-static value of an arc R < 600 m: zone {zone!r} has none (this track's: "
+                f"{', '.join(curves)})")
+    return None
+
+
 def _track_words(curve: CurveTest) -> str:
     """The track in words: ``20 m straight, 15 m transition, R = 100 m`` or ``400 m straight alone``."""
     if curve.radius_m is None:
@@ -228,6 +238,7 @@ class CurveEntryKind(CarKind):
     valve_settings = staticmethod(valve_settings)
     extra_files = staticmethod(extra_files)
     refuse_check = staticmethod(refuse_check)
+    refuse_zone = staticmethod(refuse_zone)
     zones = staticmethod(zones)
     make_car = staticmethod(make_car)
     run = staticmethod(run)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Tuple
 
@@ -21,9 +21,9 @@ from cosim.results.overlay import Selection, case_series
 from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
 from cosim.scenario.circuits import chambers_and_pipe, compile_check, with_preset
 from cosim.scenario.model import Scenario
-from cosim.scenario.schema import MAX_SAMPLES, MAX_STEPS, Range, build, check_keys, coerce, k_label, positive, require
+from cosim.scenario.schema import MAX_SAMPLES, MAX_STEPS, build, check_keys, check_range, coerce, k_label, range_of, require
 from pneumatics.chamber import Bellow, Tank, quasi_static_stiffness_N_per_m
-from pneumatics.gas import AIR
+from pneumatics.gas import ABSOLUTE_PRESSURE, AIR
 from pneumatics.pipe import Pipe
 from pneumatics.rig import (
     bellow_tank_components,
@@ -33,6 +33,7 @@ from pneumatics.rig import (
     run_time_series,
     sine_motion,
 )
+from pneumorail.quantities import Range, plausible, positive, ranged
 
 #: the amplitude of a rig test
 AMPLITUDE = Range(None, None, unit="m", why="a crushing amplitude; 0 moves nothing", nonzero=True)
@@ -43,14 +44,13 @@ AMPLITUDE = Range(None, None, unit="m", why="a crushing amplitude; 0 moves nothi
 class RampTest:
     """Fig. 3: crushing ramp to ``amplitude_m`` in ``ramp_s``, held until ``duration_s``."""
 
-    amplitude_m: float = 0.02
+    amplitude_m: float = field(default=0.02, metadata=ranged(AMPLITUDE))
     ramp_s: float = 1.0
     duration_s: float = 30.0
-    samples: int = 601
-    configurations: Tuple[str, ...] = ("bellow_tank", "bellow_only")
+    samples: int = field(default=601, metadata=plausible(2, MAX_SAMPLES, why="stored time points"))
+    configurations: Tuple[str, ...] = field(default=("bellow_tank", "bellow_only"), metadata=ranged(non_empty=True,
+                                                                                                    unique=True))
 
-    FIELD_RANGES = {"amplitude_m": AMPLITUDE, "samples": Range(2, MAX_SAMPLES, why="stored time points")}
-    FIELD_LIST_RULES = {"configurations": (True, True)}
 
 
 @dataclass(frozen=True)
@@ -60,36 +60,31 @@ class SineTest:
     temperature drifts by less than ``stable_drift_K_per_period`` over the last tenth of it
     (default 1e-3 K: at 1 Hz, less than 4 K an hour)."""
 
-    amplitude_m: float = 0.02
-    frequency_Hz: float = 1.0
+    amplitude_m: float = field(default=0.02, metadata=ranged(AMPLITUDE))
+    frequency_Hz: float = field(default=1.0, metadata=ranged(positive("Hz")))
     duration_s: float = 300.0
-    samples_per_period: int = 20
-    stable_drift_K_per_period: float = 1e-3
+    samples_per_period: int = field(default=20, metadata=plausible(2, 10_000, why="stored time points per period"))
+    stable_drift_K_per_period: float = field(default=1e-3, metadata=ranged(positive("K per period")))
 
-    FIELD_RANGES = {"amplitude_m": AMPLITUDE, "frequency_Hz": positive("Hz"),
-                    "samples_per_period": Range(2, 10_000, why="stored time points per period"),
-                    "stable_drift_K_per_period": positive("K per period")}
 
 
 @dataclass(frozen=True)
 class StiffnessTest:
     """Fig. 6: K_dyn (eq. 9) on the periodic steady state for each frequency."""
 
-    amplitude_m: float = 0.02
-    frequencies_Hz: Tuple[float, ...] = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0)
+    amplitude_m: float = field(default=0.02, metadata=ranged(AMPLITUDE))
+    frequencies_Hz: Tuple[float, ...] = field(default=(0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0),
+                                              metadata=ranged(positive("Hz"), non_empty=True, unique=True))
 
-    FIELD_RANGES = {"amplitude_m": AMPLITUDE, "frequencies_Hz": positive("Hz")}
-    FIELD_LIST_RULES = {"frequencies_Hz": (True, True)}
 
 
 @dataclass(frozen=True)
 class QuasiStaticTest:
     """Table 2: slope of a slow small ramp."""
 
-    amplitude_m: float = 1e-4
+    amplitude_m: float = field(default=1e-4, metadata=ranged(AMPLITUDE))
     ramp_s: float = 20.0
 
-    FIELD_RANGES = {"amplitude_m": AMPLITUDE}
 
 
 
@@ -102,7 +97,7 @@ class RigCircuit:
     bellow: Bellow
     tank: Optional[Tank]
     pipe: Pipe
-    p0_Pa: float
+    p0_Pa: float = field(metadata=ranged(ABSOLUTE_PRESSURE))
 
     def components(self, with_tank: bool = True) -> Dict[str, object]:
         return bellow_tank_components(self.bellow, self.tank if with_tank else None, self.pipe)
@@ -172,8 +167,7 @@ def _rig_circuit(data: Mapping, file) -> RigCircuit:
     data = with_preset(data, file, ("bellow", "tank", "pipe", "p0_Pa"))
     bellow, tank, pipe = chambers_and_pipe(data, file)
     p0 = coerce(require(data, "p0_Pa", file, ["circuit"]), float, file, ["circuit", "p0_Pa"])
-    if not p0 > 0:
-        raise ScenarioError(file, ["circuit", "p0_Pa"], f"expected an absolute pressure > 0 Pa, got {p0:g}")
+    check_range(p0, range_of(RigCircuit, "p0_Pa"), file, ["circuit", "p0_Pa"])
     rig = RigCircuit(bellow, tank, pipe, p0)
     compile_check(rig.components(tank is not None), file, ["circuit"], {"bellow": "bellow", "tank": "tank", "pipe": "pipe"})
     return rig

@@ -24,7 +24,7 @@ import hashlib
 import math
 import os
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -37,8 +37,9 @@ from cosim.results.io import Progress, atomic_write
 from cosim.results.outcome import Computed, Outcome, warn
 from cosim.results.plots import Curve, Figure, Panel, k_legend
 from cosim.scenario.model import Scenario
-from cosim.scenario.schema import Range, build, check_valve_settings, positive
-from vehicle.params import ContactParams, VehicleParams
+from cosim.scenario.schema import build, check_valve_settings
+from pneumorail.quantities import Range, plausible, positive, ranged
+from vehicle.params import TABLE_SMOOTHING, ContactParams, VehicleParams
 
 #: the carbody's modes reported per case, as the mode labels name them
 BODY_MODES = ("carbody bounce", "carbody pitch", "carbody yaw", "carbody lower sway", "carbody upper sway")
@@ -50,6 +51,12 @@ SMALL_AMPLITUDE_FACTOR = 4.0
 #: the frequency at which the static stiffness is read [rad/s]: far below every thermal and flow
 #: time constant of the circuits (hours), far above the neutral air-mass mode (0)
 STATIC_OMEGA_RAD_PER_S = 1e-6
+
+
+#: ranges of :class:`StabilityTest`'s fields (metadata): a speed the scan may report at, and a
+#: lateral offset of the wheelsets inside the flangeway
+_SPEED = plausible(0.0, 100.0, "m/s", low_inclusive=False)
+_DISTURBANCE = Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)")
 
 
 @dataclass(frozen=True)
@@ -77,43 +84,30 @@ class StabilityTest:
     cycle dies is where the leading wheelset's amplitude falls below 5 % of the limit cycle's at the
     start speed (it collapses there, or has faded into the decay of a stable car)."""
 
-    speeds_m_per_s: Tuple[float, ...] = tuple(float(v) for v in range(5, 101, 5))
-    resolution_m_per_s: float = 0.1
-    reference_speed_m_per_s: Optional[float] = None
-    max_frequency_Hz: float = 20.0
-    conicity: Optional[float] = None
+    speeds_m_per_s: Tuple[float, ...] = field(default=tuple(float(v) for v in range(5, 101, 5)), metadata=plausible(
+        0.0, 100.0, "m/s", "360 km/h at most; > 0 (creepages are relative to V)", low_inclusive=False, non_empty=True,
+        unique=True))
+    resolution_m_per_s: float = field(default=0.1, metadata=plausible(1e-3, 10.0, "m/s", "the bisection's final bracket"))
+    reference_speed_m_per_s: Optional[float] = field(default=None, metadata=_SPEED)
+    max_frequency_Hz: float = field(default=20.0, metadata=ranged(positive("Hz")))
+    conicity: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 0.8, "", "equivalent conicities of wheels in service: 0.01-0.6", low_inclusive=False))
     wheel_profile: Optional[str] = None
-    contact_smoothing_mm: Optional[float] = None
-    valve_settings: Tuple[bool, ...] = (False,)
-    nonlinear_speeds_m_per_s: Tuple[float, ...] = ()
-    disturbances_m: Tuple[float, ...] = (0.0005,)
-    nonlinear_s: float = 10.0
-    ramp_from_m_per_s: Optional[float] = None
-    ramp_to_m_per_s: float = 20.0
-    ramp_decelerations_m_per_s2: Tuple[float, ...] = (0.2, 0.1)
-    ramp_hold_s: float = 5.0
-    ramp_disturbance_m: float = 0.003
-
-    FIELD_RANGES = {
-        "speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most; > 0 (creepages are relative to V)"),
-        "resolution_m_per_s": Range(1e-3, 10.0, unit="m/s", why="the bisection's final bracket"),
-        "reference_speed_m_per_s": Range(0.0, 100.0, False, True, "m/s"),
-        "max_frequency_Hz": positive("Hz"),
-        "conicity": Range(0.0, 0.8, False, True, "", "equivalent conicities of wheels in service: 0.01-0.6"),
-        "contact_smoothing_mm": Range(0.0, 1.0, unit="mm", why="0: the rigid table; 1 mm blurs the flange itself"),
-        "nonlinear_speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most"),
-        "disturbances_m": Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)"),
-        "nonlinear_s": Range(1.0, 600.0, unit="s", why="long enough for several hunting cycles"),
-        "ramp_from_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most"),
-        "ramp_to_m_per_s": Range(0.0, 100.0, False, True, "m/s", "> 0: the creepages are relative to the speed"),
-        "ramp_decelerations_m_per_s2": Range(1e-3, 2.0, unit="m/s^2", why="slow: the limit cycle must follow the speed"),
-        "ramp_hold_s": Range(1.0, 600.0, unit="s", why="the time to settle on the limit cycle; its last second "
-                                                      "gives the limit cycle's amplitude"),
-        "ramp_disturbance_m": Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)"),
-    }
-    FIELD_LIST_RULES = {"speeds_m_per_s": (True, True), "valve_settings": (True, True),
-                        "nonlinear_speeds_m_per_s": (False, True), "disturbances_m": (True, True),
-                        "ramp_decelerations_m_per_s2": (True, True)}
+    contact_smoothing_mm: Optional[float] = field(default=None, metadata=TABLE_SMOOTHING)
+    valve_settings: Tuple[bool, ...] = field(default=(False,), metadata=ranged(non_empty=True, unique=True))
+    nonlinear_speeds_m_per_s: Tuple[float, ...] = field(default=(), metadata=plausible(
+        0.0, 100.0, "m/s", "360 km/h at most", low_inclusive=False, unique=True))
+    disturbances_m: Tuple[float, ...] = field(default=(0.0005,), metadata=ranged(_DISTURBANCE, non_empty=True, unique=True))
+    nonlinear_s: float = field(default=10.0, metadata=plausible(1.0, 600.0, "s", "long enough for several hunting cycles"))
+    ramp_from_m_per_s: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 100.0, "m/s", "360 km/h at most", low_inclusive=False))
+    ramp_to_m_per_s: float = field(default=20.0, metadata=plausible(
+        0.0, 100.0, "m/s", "> 0: the creepages are relative to the speed", low_inclusive=False))
+    ramp_decelerations_m_per_s2: Tuple[float, ...] = field(default=(0.2, 0.1), metadata=plausible(
+        1e-3, 2.0, "m/s^2", "slow: the limit cycle must follow the speed", non_empty=True, unique=True))
+    ramp_hold_s: float = field(default=5.0, metadata=plausible(
+        1.0, 600.0, "s", "the time to settle on the limit cycle; its last second gives the limit cycle's amplitude"))
+    ramp_disturbance_m: float = field(default=0.003, metadata=ranged(_DISTURBANCE))
 
     def ramp_duration_s(self, deceleration_m_per_s2: float) -> float:
         """How long a ramp-down at that deceleration runs [s]."""

@@ -4,7 +4,7 @@ the levelling valves isolated and/or connected. Kind ``twist``, section ``twist`
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -22,7 +22,8 @@ from cosim.results.overlay import Selection, case_series, worst_wheels
 from cosim.results.plots import Curve, Figure, Panel, Span, save_panels
 from cosim.runs.car import add_wheel_unloading, air_columns, bellow_panels, fault_columns, fault_figure, of_setting, per_case
 from cosim.scenario.model import DEFAULT_WINDOW_S, Scenario
-from cosim.scenario.schema import Range, build, check_valve_settings, k_label, positive
+from cosim.scenario.schema import build, check_valve_settings, k_label
+from pneumorail.quantities import Range, plausible, positive, ranged
 from vehicle.params import WHEELS, VehicleParams
 
 #: Largest track twist [per mille] a twist test may apply: three times the largest EN 14363 limit
@@ -69,22 +70,17 @@ class TwistTest:
     null: one run as ``circuit.valves`` says.
     """
 
-    base_m: float = 10.0
-    twist_per_mille: Optional[float] = None
-    raised_wheels: Tuple[str, ...] = ("1R", "2R")
+    base_m: float = field(default=10.0, metadata=ranged(positive("m", "the base length 2a*")))
+    twist_per_mille: Optional[float] = field(default=None, metadata=ranged(_TWIST))
+    raised_wheels: Tuple[str, ...] = field(default=("1R", "2R"), metadata=ranged(non_empty=True, unique=True))
     ramp_s: float = 5.0
     hold_s: float = 35.0
-    start_s: float = 0.0
-    bogie_base_m: Optional[float] = None
-    bogie_twist_per_mille: Optional[float] = None
+    start_s: float = field(default=0.0, metadata=plausible(0.0, 3600.0, "s", "a wait before the ramp, up to an hour"))
+    bogie_base_m: Optional[float] = field(default=None, metadata=ranged(positive("m", "the wheelbase 2a+")))
+    bogie_twist_per_mille: Optional[float] = field(default=None, metadata=ranged(_TWIST))
     window_s: Optional[float] = None
-    settle_drift: float = 1e-3
+    settle_drift: float = field(default=1e-3, metadata=ranged(positive(why="a drift of dQ/Q0")))
     valve_settings: Optional[Tuple[bool, ...]] = None
-
-    FIELD_RANGES = {"base_m": positive("m", "the base length 2a*"), "bogie_base_m": positive("m", "the wheelbase 2a+"),
-                    "twist_per_mille": _TWIST, "bogie_twist_per_mille": _TWIST, "settle_drift": positive(why="a drift of dQ/Q0"),
-                    "start_s": Range(0.0, 3600.0, unit="s", why="a wait before the ramp, up to an hour")}
-    FIELD_LIST_RULES = {"raised_wheels": (True, True)}
 
     @property
     def twist(self) -> float:

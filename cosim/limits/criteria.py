@@ -53,7 +53,12 @@ def largest_track_twist(cant_rad, s_m, base_m: float, rail_base_m: float) -> tup
 SLIDING_MEAN_M = 2.0
 
 
-def nadal_limit(flange_angle_deg: float = 70.0, friction: float = 0.36) -> float:
+#: the flange angle [deg] and friction coefficient EN 14363 and UIC 518 take Nadal's limit at
+NADAL_FLANGE_ANGLE_DEG = 70.0
+NADAL_FRICTION = 0.36
+
+
+def nadal_limit(flange_angle_deg: float = NADAL_FLANGE_ANGLE_DEG, friction: float = NADAL_FRICTION) -> float:
     """Nadal's limit of the flanging wheel's Y/Q (Nadal 1908; EN 14363 and UIC 518 use its
     value for γ = 70°, μ = 0.36):
 

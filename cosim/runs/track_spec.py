@@ -7,25 +7,46 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Optional, Tuple
 
 import numpy as np
 
 from cosim.errors import ScenarioError
-from cosim.limits.criteria import nadal_limit
+from cosim.limits.criteria import NADAL_FLANGE_ANGLE_DEG, NADAL_FRICTION, nadal_limit
 from cosim.scenario.model import DEFAULT_WINDOW_S
-from cosim.scenario.schema import Range, build, check_valve_settings, describe, positive
-from vehicle.irregularities import CHANNELS, MAX_SAMPLES, PERIOD_FACTOR, TrackIrregularity, canonical_kind
-from vehicle.params import ContactParams, VehicleParams
+from cosim.scenario.schema import build, check_valve_settings, describe
+from pneumorail.quantities import Range, plausible, positive, ranged
+from vehicle.irregularities import (
+    CHANNELS,
+    DEFAULT_WAVELENGTH_RANGE_M,
+    MAX_SAMPLES,
+    PERIOD_FACTOR,
+    TrackIrregularity,
+    canonical_kind,
+)
+from vehicle.params import CONTACT_DAMPING, FRICTION, TABLE_SMOOTHING, ContactParams, VehicleParams
 from vehicle.track import TRANSITION_SHAPES, Straight, TrackGeometry
 
 #: Largest cant [rad]: 0.2 rad is 300 mm over the 1.5 m rail-centre distance; railway cant is
 #: limited to 150-200 mm (EN 13803: 180 mm, ~0.12 rad).
 MAX_CANT_RAD = 0.2
+#: the range of a cant (field metadata of a curve's and a ride's)
+CANT = plausible(-MAX_CANT_RAD, MAX_CANT_RAD, "rad", "0.2 rad = 300 mm over 1.5 m; railway cant is at most ~0.12 rad")
 #: Highest running speed [m/s]: 100 m/s = 360 km/h, beyond any metro and the wheel-rail model.
 MAX_SPEED_M_PER_S = 100.0
+#: the range of a running speed (field metadata of a curve's and each of a ride's)
+SPEED = Range(0.0, MAX_SPEED_M_PER_S, False, True, "m/s", "360 km/h at most")
+#: the range of a curve's radius (field metadata of a curve's and a ride's): the tightest tram
+#: curves are ~13-15 m (street corners, depot loops), metro lines keep 100-300 m in service; at
+#: 100 km a curve is straight for every purpose (EN 14363's widest zone starts at 600 m). A
+#: radius in km falls out (0.25 for 250 m), and its slip is named
+RADIUS = plausible(10.0, 1e5, "m", "a railway curve, tram to straight")
+#: the range of a transition's length (field metadata of a curve's and a ride's): 10-30 m on
+#: metro lines, up to ~300 m where high speed and cant need it (its length grows with both); a
+#: length in mm falls out
+TRANSITION = plausible(0.0, 1000.0, "m", "a transition curve, metro to high-speed lines", low_inclusive=False)
 #: Longest track [m]: the car tabulates it every 0.1 m (vehicle.guidance.TrackSampler), ~100 bytes
 #: per point; 200 km is 2e6 points, 5 minutes at 100 m/s is 30 km
 MAX_TRACK_LENGTH_M = 2.0e5
@@ -45,12 +66,17 @@ class IrregularitySpec:
     generates the same track from the same seed (:mod:`vehicle.irregularities`)."""
 
     psd: Optional[str] = None
-    seed: int = 0
-    wavelength_range_m: Tuple[float, ...] = (3.0, 150.0)
-    channels: Tuple[str, ...] = ("lateral", "vertical", "cross_level", "gauge")
-    ds_m: float = 0.25
-    start_m: Optional[float] = None
-    taper_m: float = 10.0
+    seed: int = field(default=0, metadata=plausible(0, None, why="a random seed: the same seed, the same track"))
+    # EN 13848's bands span 3-150 m (D1-D3), the FRA PSDs 1.5-300 m; 0.1 m reaches rail
+    # corrugation, 1 km beyond any vehicle's response: a wavelength in mm falls out
+    wavelength_range_m: Tuple[float, ...] = field(default=DEFAULT_WAVELENGTH_RANGE_M, metadata=plausible(
+        0.1, 1000.0, "m", "a track irregularity's wavelength, corrugation to 1 km"))
+    channels: Tuple[str, ...] = CHANNELS
+    # (and at most half the shortest wavelength: parse_irregularity)
+    ds_m: float = field(default=0.25, metadata=plausible(0.0, 10.0, "m", "a sample spacing", low_inclusive=False))
+    start_m: Optional[float] = field(default=None, metadata=plausible(0.0, MAX_TRACK_LENGTH_M, "m", "a position on the track"))
+    taper_m: float = field(default=10.0, metadata=plausible(0.0, 1000.0, "m", "the length the irregularity fades in and out "
+                                                                              "over; 0: none"))
     file: Optional[str] = None
 
     def build(self, track_length_m: float, start_m: float) -> TrackIrregularity:
@@ -102,34 +128,28 @@ class CurveTest:
     ... fra_6, seed, wavelength_range_m: [3, 150], channels, ds_m, start_m, taper_m} or {file:
     path relative to the scenario} (:class:`IrregularitySpec`)."""
 
-    speed_m_per_s: float = 10.0
-    straight_m: float = 20.0
-    transition_m: float = 15.0
+    speed_m_per_s: float = field(default=10.0, metadata=ranged(SPEED))
+    # (the straight and the arc: bounded by what the run covers and MAX_TRACK_LENGTH_M, in parse)
+    straight_m: float = field(default=20.0, metadata=ranged(positive("m")))
+    transition_m: float = field(default=15.0, metadata=TRANSITION)
     transition_shape: str = "bloss"
-    radius_m: Optional[float] = 100.0
-    arc_m: float = 300.0
-    cant_rad: float = 0.0
-    direction: int = 1
+    radius_m: Optional[float] = field(default=100.0, metadata=RADIUS)
+    arc_m: float = field(default=300.0, metadata=ranged(positive("m")))
+    cant_rad: float = field(default=0.0, metadata=CANT)
+    direction: int = field(default=1, metadata=plausible(-1, 1, why="1 (left) or -1 (right)", nonzero=True))
     duration_s: float = 30.0
     valve_settings: Tuple[bool, ...] = (False, True)
     window_s: Optional[float] = None
     guidance: str = "contact"
-    friction_coefficient: Optional[float] = None
-    contact_damping_N_s_per_m: Optional[float] = None
-    contact_smoothing_mm: Optional[float] = None
-    nadal_flange_angle_deg: float = 70.0
-    nadal_friction: float = 0.36
-    prudhomme_alpha: float = 1.0
+    friction_coefficient: Optional[float] = field(default=None, metadata=FRICTION)
+    contact_damping_N_s_per_m: Optional[float] = field(default=None, metadata=CONTACT_DAMPING)
+    contact_smoothing_mm: Optional[float] = field(default=None, metadata=TABLE_SMOOTHING)
+    nadal_flange_angle_deg: float = field(default=NADAL_FLANGE_ANGLE_DEG, metadata=plausible(
+        0.0, 90.0, "deg", "a flange angle", low_inclusive=False, high_inclusive=False))
+    nadal_friction: float = field(default=NADAL_FRICTION, metadata=plausible(0.0, 1.0, why="a friction coefficient"))
+    prudhomme_alpha: float = field(default=1.0, metadata=plausible(0.0, 1.0, why="EN 14363: 1, freight wagons 0.85",
+                                                                   low_inclusive=False))
     irregularity: Optional[IrregularitySpec] = None
-
-    FIELD_RANGES = {
-        "speed_m_per_s": Range(0.0, MAX_SPEED_M_PER_S, False, True, "m/s", "360 km/h at most"),
-        "straight_m": positive("m"), "transition_m": positive("m"), "radius_m": positive("m"), "arc_m": positive("m"),
-        "cant_rad": Range(-MAX_CANT_RAD, MAX_CANT_RAD, unit="rad",
-                          why="0.2 rad = 300 mm over 1.5 m; railway cant is at most ~0.12 rad"),
-        "contact_damping_N_s_per_m": Range(0.0, 1e7, unit="N s/m", why="the shipped 2e5 stands in for the track's damping"),
-        "contact_smoothing_mm": Range(0.0, 1.0, unit="mm", why="0: the rigid table; 1 mm blurs the flange itself"),
-    }
 
     @property
     def window(self) -> float:
@@ -181,8 +201,6 @@ def parse(data, vehicle: VehicleParams, path: Path) -> CurveTest:
         irregularity = data["irregularity"]
         data = {k: v for k, v in data.items() if k != "irregularity"}
     curve = build(CurveTest, data, path, ["curve"])
-    if curve.direction not in (1, -1):
-        raise ScenarioError(path, ["curve", "direction"], f"expected 1 (left) or -1 (right), got {curve.direction}")
     if curve.transition_shape not in TRANSITION_SHAPES:
         raise ScenarioError(path, ["curve", "transition_shape"], f"expected one of {', '.join(TRANSITION_SHAPES)}, "
                                                                  f"got {curve.transition_shape!r}")
@@ -220,26 +238,13 @@ def _check_contact(curve: CurveTest, path) -> None:
     """The guidance, the contact model's friction and the limits' parameters of a curve."""
     if curve.guidance not in GUIDANCE:
         raise ScenarioError(path, ["curve", "guidance"], f"expected one of {', '.join(GUIDANCE)}, got {curve.guidance!r}")
-    mu = curve.friction_coefficient
-    if mu is not None and not 0.0 < mu <= 1.0:
-        raise ScenarioError(path, ["curve", "friction_coefficient"], f"expected a wheel-rail friction coefficient in "
-                                                                     f"(0, 1] (dry rail 0.3-0.5), got {mu:g}")
     for key in ("friction_coefficient", "contact_damping_N_s_per_m", "contact_smoothing_mm"):
         if getattr(curve, key) is not None and not curve.contact:
             raise ScenarioError(path, ["curve", key], "a parameter of the contact model needs curve.guidance: contact")
-    if not 0.0 < curve.nadal_flange_angle_deg < 90.0:
-        raise ScenarioError(path, ["curve", "nadal_flange_angle_deg"], f"expected a flange angle in (0, 90) degrees, "
-                                                                       f"got {curve.nadal_flange_angle_deg:g}")
-    if not 0.0 <= curve.nadal_friction <= 1.0:
-        raise ScenarioError(path, ["curve", "nadal_friction"], f"expected a friction coefficient in [0, 1], "
-                                                               f"got {curve.nadal_friction:g}")
     if not nadal_limit(curve.nadal_flange_angle_deg, curve.nadal_friction) > 0.0:
         raise ScenarioError(path, ["curve", "nadal_friction"], f"the Nadal limit (tan g - mu)/(1 + mu tan g) must be "
                                                                f"> 0: mu = {curve.nadal_friction:g} is not below tan "
                                                                f"{curve.nadal_flange_angle_deg:g} deg")
-    if not 0.0 < curve.prudhomme_alpha <= 1.0:
-        raise ScenarioError(path, ["curve", "prudhomme_alpha"], f"expected a factor in (0, 1] (EN 14363: 1, freight "
-                                                                f"wagons 0.85), got {curve.prudhomme_alpha:g}")
 
 
 def parse_irregularity(value, curve: CurveTest, vehicle: VehicleParams, path, where=("curve", "irregularity")):
@@ -266,8 +271,6 @@ def parse_irregularity(value, curve: CurveTest, vehicle: VehicleParams, path, wh
             spec = dataclasses.replace(spec, psd=canonical_kind(spec.psd))
         except ValueError as exc:
             raise ScenarioError(path, [*where, "psd"], str(exc)) from None
-        if spec.seed < 0:
-            raise ScenarioError(path, [*where, "seed"], f"expected an integer >= 0, got {spec.seed}")
         band = spec.wavelength_range_m
         if len(band) != 2 or not 0.0 < band[0] < band[1]:
             raise ScenarioError(path, [*where, "wavelength_range_m"], f"expected [shortest, longest] wavelength in m, "

@@ -124,6 +124,9 @@ def parse_checks(value, kind, experiment, file, k_values: Sequence[float] = (),
                 if zone not in present:
                     raise ScenarioError(file, where, f"zone {zone!r} is not a test zone of this track (its zones: "
                                                      f"{', '.join(present)})")
+                reason = kind.refuse_zone(metric, zone, experiment)
+                if reason:
+                    raise ScenarioError(file, where, reason)
                 chosen[name] = zone
             else:
                 on = raw.lower() in ("on", "true")

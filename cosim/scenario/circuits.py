@@ -4,7 +4,9 @@ once, so that an inconsistent circuit fails before any simulation."""
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Dict, Mapping, Sequence, Tuple
+from typing import Any, Dict, Mapping, NamedTuple, Sequence, Tuple
+
+import numpy as np
 
 from cosim.errors import ScenarioError
 from cosim.scenario.model import CarCircuit
@@ -162,22 +164,35 @@ def circuit_error(exc: CircuitError, file, prefix, yaml_key_of) -> ScenarioError
     return ScenarioError(file, [*prefix, yaml_key_of.get(name, name), *rest], exc.reason)
 
 
-def check_initial_state(circuit: CarCircuit, car, ks, valve_settings, path) -> None:
+class InitialAir(NamedTuple):
+    """A chamber's air when a run starts: absolute pressure [Pa] and temperature [K]."""
+
+    chamber: str
+    p_Pa: float
+    T_K: float
+
+
+def check_initial_state(circuit: CarCircuit, car, ks, valve_settings, path) -> Tuple[InitialAir, ...]:
     """Start the circuit once as the runners will (cars/runs: cosim.engine.cases.build_cosimulation):
     bellow pressures that carry the car's static load, tanks at their bellow's, every k value; an
     initial state that cannot be set (a chamber with no initial pressure, an isothermal chamber
-    not at the atmosphere's temperature) fails here, not in a worker process."""
+    not at the atmosphere's temperature) fails here, not in a worker process. Returns every
+    chamber's air at the start, in every valve setting (what the state limits must admit)."""
     explicit = circuit.explicit is not None
     prefix, keys = (["circuit", "components"], {}) if explicit else (["circuit"], LAYOUT_KEYS)
+    air = []
     for setting in dict.fromkeys(valve_settings):
         components = circuit.components() if explicit else dataclasses.replace(circuit, valves=setting).components()
         try:
             c = Circuit(components, k_W_per_K=list(ks))
-            c.initial_state(static_pressures(components, car.static_bellow_forces_N(), c.atmosphere.p_Pa))
+            x = c.initial_state(static_pressures(components, car.static_bellow_forces_N(), c.atmosphere.p_Pa))
         except CircuitError as exc:
             if exc.reason == "initial pressure is not set":
                 exc.reason += " (give it p0_Pa, or join it to a bellow by a pipe or an orifice: it starts at the bellow's)"
             raise circuit_error(exc, path, prefix, keys) from None
+        p, T = c.chamber_states(x, np.zeros((len(c.bellow_names),) + x.shape[1:]))      # every bellow at z = 0
+        air += [InitialAir(name, float(p[i].max()), float(T[i].max())) for i, name in enumerate(c.chamber_names)]
+    return tuple(air)
 
 
 def parse_faults(value, file, circuit: CarCircuit, duration_s: float, valve_settings) -> Tuple[Fault, ...]:
@@ -194,8 +209,11 @@ def parse_faults(value, file, circuit: CarCircuit, duration_s: float, valve_sett
         if not f.t_s < duration_s:
             raise ScenarioError(file, [f"faults[{i}]", "t_s"], f"the fault must happen within the run, before its end "
                                                                f"at {duration_s:g} s; got {f.t_s:g} s")
+        _check_one_fault_at_a_time(faults, i, file)
     explicit = circuit.explicit is not None
-    for setting in dict.fromkeys(valve_settings):
+    # the settings with the valves first: a name that is no component at all is then answered with
+    # every component the runs have, the valves among them
+    for setting in sorted(dict.fromkeys(valve_settings), reverse=True):
         components = circuit.components() if explicit else dataclasses.replace(circuit, valves=setting).components()
         try:
             Circuit(components, faults=faults)
@@ -208,3 +226,22 @@ def parse_faults(value, file, circuit: CarCircuit, duration_s: float, valve_sett
                               f"(valve_settings: [true])")
             raise ScenarioError(file, list(exc.path), exc.reason) from None
     return faults
+
+
+#: fault kinds that open a chamber to the atmosphere: several at one instant are several openings
+OPENINGS = ("burst", "leak")
+
+
+def _check_one_fault_at_a_time(faults: Sequence[Fault], i: int, file) -> None:
+    """Fault ``i`` may not set the state of a component an earlier fault sets at the same instant
+    (stuck open and stuck closed, blocked and ruptured ...): the two would contradict each other,
+    or one repeat the other, and which one holds would depend on their order in the list (of two
+    at different times the later one holds). Openings (:data:`OPENINGS`) add up, and may coincide."""
+    f = faults[i]
+    for j, other in enumerate(faults[:i]):
+        if (other.component == f.component and other.t_s == f.t_s and f.kind not in OPENINGS
+                and other.kind not in OPENINGS):
+            raise ScenarioError(file, [f"faults[{i}]"], f"faults[{j}] already makes {f.component!r} "
+                                                        f"{other.kind.replace('_', ' ')} at {f.t_s:g} s: one fault of a "
+                                                        f"component at a time (give this one another t_s, or remove "
+                                                        f"one of them)")

@@ -18,6 +18,7 @@ from pneumatics.faults import Fault
 from pneumatics.layouts import car_circuit
 from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve
+from pneumorail.quantities import plausible
 from vehicle.params import SPECTRAL_RADIUS, TrackStructure, VehicleParams
 
 #: default length of the final window the quasi-static end values are averaged over [s]
@@ -45,16 +46,27 @@ class SolverSettings:
     pneumatic_step_s: float = 0.005
     coupling: str = "linearised"
     output_interval_s: float = 0.02
-    jobs: int = 2
-    spectral_radius: float = SPECTRAL_RADIUS
+    jobs: int = field(default=2, metadata=plausible(1, 256, why="worker processes"))
+    spectral_radius: float = field(default=SPECTRAL_RADIUS, metadata=plausible(
+        0.0, 1.0, why="generalized-alpha: 1 damps nothing, 0 the most"))
+
+
+#: ranges of :class:`StateLimits`' fields (metadata): a roll relative to the track plane (3.2 rad:
+#: upside down); air temperature and pressure limits up to 10 000 K and 1000 bar, far beyond
+#: any air (a limit must also admit the air a run starts with: cosim.load)
+_ROLL = plausible(0.0, 3.2, "rad", "a roll relative to the track plane", low_inclusive=False)
+_TEMPERATURE_LIMIT = plausible(0.0, 1e4, "K", "a limit of the air's temperature", low_inclusive=False)
+_PRESSURE_LIMIT = plausible(0.0, 1e8, "Pa absolute", "a limit of the air's pressure", low_inclusive=False)
 
 
 @dataclass(frozen=True)
 class StateLimits:
     """States no car can be in: a case whose state passes one of these stops at the end of that
     macro-step with a diagnosis (time, body or component, state) and the run exits 1, keeping
-    what it computed (:mod:`cosim.limits.watch`). Each is far beyond what a running car reaches, so
-    that it marks a capsized, derailed or crushed car, not a demanding one:
+    what it computed (:mod:`cosim.limits.watch`); a limit the air already passes when the run
+    starts (a chamber's initial pressure or temperature, e.g. ``T_max_K`` written in degrees
+    Celsius) is refused when the scenario is loaded. Each is far beyond what a running car reaches,
+    so that it marks a capsized, derailed or crushed car, not a demanding one:
 
     * ``carbody_roll_rad``: the carbody rolled relative to the track plane by more than this
       (0.2 rad: the paper's car rolls 0.03 rad at 1 m/s^2 of unbalanced lateral acceleration;
@@ -75,15 +87,17 @@ class StateLimits:
       above 1000 K; the car's bellows carry ~4.2 bar).
     """
 
-    carbody_roll_rad: float = 0.2
-    bogie_roll_rad: float = 0.1
+    carbody_roll_rad: float = field(default=0.2, metadata=_ROLL)
+    bogie_roll_rad: float = field(default=0.1, metadata=_ROLL)
     wheelset_lift_s: float = 0.1
-    bellow_crushing_fraction: float = 1.0
-    bellow_volume_fraction: float = 0.05
-    T_min_K: float = 150.0
-    T_max_K: float = 1000.0
-    p_min_Pa: float = 1.0e4
-    p_max_Pa: float = 5.0e6
+    bellow_crushing_fraction: float = field(default=1.0, metadata=plausible(
+        0.0, 10.0, why="a fraction of the bellow height", low_inclusive=False))
+    bellow_volume_fraction: float = field(default=0.05, metadata=plausible(
+        0.0, 1.0, why="a fraction of the bellow's volume", high_inclusive=False))
+    T_min_K: float = field(default=150.0, metadata=_TEMPERATURE_LIMIT)
+    T_max_K: float = field(default=1000.0, metadata=_TEMPERATURE_LIMIT)
+    p_min_Pa: float = field(default=1.0e4, metadata=_PRESSURE_LIMIT)
+    p_max_Pa: float = field(default=5.0e6, metadata=_PRESSURE_LIMIT)
 
 
 @dataclass(frozen=True)
@@ -92,8 +106,9 @@ class VerifySettings:
     fails when a headline metric's estimated relative discretisation error (Richardson) at
     the scenario's own steps exceeds ``tolerance``."""
 
-    tolerance: float = 0.005
-    levels: int = 2
+    tolerance: float = field(default=0.005, metadata=plausible(0.0, 1.0, why="a relative error", low_inclusive=False,
+                                                                high_inclusive=False))
+    levels: int = field(default=2, metadata=plausible(2, 6, why="halvings of every step; each doubles the cost of the last run"))
 
 
 @dataclass(frozen=True)

@@ -3,11 +3,11 @@
 One generic mechanism serves every parameter dataclass (pneumatic components, vehicle
 parameters, test definitions): field types come from the dataclass annotations; every number
 must be finite (``.inf`` only where the field's default is infinite, where it means something:
-an infinite supply reservoir, a rigid damper mounting); and every number must lie in its range
-(:data:`RANGES`, looked up as ``Class.field`` along the class's MRO, then by unit suffix,
-:data:`SUFFIX_RANGES`: a quantity such as a volume, a mass, an absolute pressure or a duration is
-> 0). Lists are checked element by element, and for being non-empty and free of duplicates where
-that matters (:data:`LIST_RULES`). The checks are pure functions of the data: the first field in
+an infinite supply reservoir, a rigid damper mounting); and every number must lie in its range:
+the one its field declares next to it, as metadata (:mod:`pneumorail.quantities`), else the one
+of its unit suffix (:data:`SUFFIX_RANGES`: a quantity such as a volume, a mass, an absolute
+pressure or a duration is > 0). Lists are checked element by element, and for being non-empty
+and free of duplicates where their field says so (metadata too). The checks are pure functions of the data: the first field in
 error, in the dataclass's field order, is reported, whatever the interpreter's hash seed.
 """
 from __future__ import annotations
@@ -16,73 +16,16 @@ import dataclasses
 import math
 import re
 import typing
-from typing import Any, Dict, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 from cosim.errors import ScenarioError
-from vehicle.params import VehicleParams
+from pneumorail.quantities import Range, list_rule_of_field, number_text, positive, range_of_field
 
 _NUMBER_STRING = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)[eE][+-]?\d+$")
 
 
 # ----------------------------------------------------------------------------------- ranges
-class Range(NamedTuple):
-    """Allowed values of a number: ``low``/``high`` bounds (None: unbounded), each inclusive or
-    not; ``nonzero`` excludes 0; ``unit`` and ``why`` complete the message."""
-
-    low: Optional[float] = None
-    high: Optional[float] = None
-    low_inclusive: bool = True
-    high_inclusive: bool = True
-    unit: str = ""
-    why: str = ""
-    nonzero: bool = False
-    #: 0 (an absent component) and inf (a rigid one) allowed besides the bounds
-    zero_or_inf: bool = False
-
-    def admits(self, v: float) -> bool:
-        if self.zero_or_inf and (v == 0 or v == math.inf):
-            return True
-        if self.nonzero and v == 0:
-            return False
-        if self.low is not None and not (v >= self.low if self.low_inclusive else v > self.low):
-            return False
-        if self.high is not None and not (v <= self.high if self.high_inclusive else v < self.high):
-            return False
-        return True
-
-    def expected(self, integer: bool = False) -> str:
-        u = f" {self.unit}" if self.unit else ""
-        a = "an integer" if integer else ""
-        if self.low is not None and self.high is not None:
-            lo, hi = ("[" if self.low_inclusive else "("), ("]" if self.high_inclusive else ")")
-            text = f"{a} in {lo}{_num(self.low)}, {_num(self.high)}{hi}{u}"
-        elif self.low is not None:
-            text = f"{a} {'>=' if self.low_inclusive else '>'} {_num(self.low)}{u}"
-        elif self.high is not None:
-            text = f"{a} {'<=' if self.high_inclusive else '<'} {_num(self.high)}{u}"
-        else:
-            text = a or "a number"
-        if self.nonzero:
-            text += f" other than 0{u}"
-        if self.zero_or_inf:
-            text = f"0 (none), inf (rigid) or{text}"
-        text = text.strip()
-        return text + (f" ({self.why})" if self.why else "")
-
-
-def _num(v) -> str:
-    """A bound or a value for messages: 1000000, not 1e+06; 0.005, 1e-08."""
-    if isinstance(v, int) or (isinstance(v, float) and v.is_integer() and abs(v) < 1e7):
-        return str(int(v))
-    return f"{v:g}"
-
-
-def positive(unit: str = "", why: str = "") -> Range:
-    return Range(0.0, None, False, True, unit, why)
-
-
-def nonnegative(unit: str = "", why: str = "") -> Range:
-    return Range(0.0, None, True, True, unit, why)
+_num = number_text
 
 
 #: Largest number of samples (time points) one series may hold: 1e6 rows of a few dozen columns
@@ -92,80 +35,7 @@ MAX_SAMPLES = 1_000_000
 #: steps, bounded below by its largest step): 1e7 steps are hours of computing. The shipped
 #: scenarios take at most 120 000.
 MAX_STEPS = 10_000_000
-#: ``Class.field`` -> allowed range; looked up along the class's MRO before the suffix rules (a
-#: kind's experiment dataclass declares its own: ``FIELD_RANGES``).
-RANGES: Dict[str, Range] = {
-    # pneumatic components
-    "Bellow.dA_dz_m": Range(unit="m", why="change of effective area with crushing, either sign"),
-    "Bellow.area_table_m2": Range(0.0, 2.0, False, True, "m^2", "an airspring's effective area"),
-    "Bellow.area_table_z_m": Range(-0.5, 0.5, unit="m", why="crushing from the static height"),
-    "Pipe.length_m": positive("m"),
-    "Pipe.diameter_m": Range(0.0, 0.3, False, True, "m", "a pneumatic pipe's bore"),
-    "Pipe.friction_factor": nonnegative(why="Darcy friction factor lambda"),
-    "Pipe.zeta": nonnegative(why="pressure-loss coefficient of fittings"),
-    "Orifice.b_critical": Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio"),
-    "LevellingValve.b_critical": Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio"),
-    "LevellingValve.lag_s": nonnegative("s", "0: no lag"),
-    "LevellingValve.delay_s": nonnegative("s", "0: no delay"),
-    "LevellingValve.hysteresis_m": Range(0.0, 0.05, unit="m", why="the lever's play; 0: no play"),
-    "LevellingValve.delay_stages": Range(1, 1000, why="first-order stages approximating the delay; "
-                                                      "one state each"),
-    "Fault.t_s": nonnegative("s", "when the fault happens; 0: from the start"),
-    "Fault.area_m2": Range(0.0, 0.1, False, True, "m^2", "an opening's effective area (a bellow's is ~0.13 m^2)"),
-    "Fault.C_m3_per_sPa": Range(0.0, 1e-4, False, True, "m^3/(s Pa)", "an ISO 6358 sonic conductance"),
-    "Fault.b_critical": Range(0.0, 1.0, True, False, why="ISO 6358 critical pressure ratio"),
-    "Fault.lever_m": Range(-0.2, 0.2, unit="m", why="a levelling valve's lever displacement (+ opens the supply side)"),
-    "SolverSettings.jobs": Range(1, 256, why="worker processes"),
-    "StateLimits.carbody_roll_rad": Range(0.0, 3.2, False, True, "rad", "a roll relative to the track plane"),
-    "StateLimits.bogie_roll_rad": Range(0.0, 3.2, False, True, "rad", "a roll relative to the track plane"),
-    "StateLimits.bellow_crushing_fraction": Range(0.0, 10.0, False, True, why="a fraction of the bellow height"),
-    "StateLimits.bellow_volume_fraction": Range(0.0, 1.0, True, False, why="a fraction of the bellow's volume"),
-    "SolverSettings.spectral_radius": Range(0.0, 1.0, unit="",
-                                            why="generalized-alpha: 1 damps nothing, 0 the most"),
-    "VerifySettings.tolerance": Range(0.0, 1.0, False, False, why="a relative error"),
-    "VerifySettings.levels": Range(2, 6, why="halvings of every step; each doubles the cost of the last run"),
-    # vehicle: every parameter is a mass, inertia, length, height above rail, stiffness, damping or
-    # clearance, none negative (0: the component is absent); the geometry and masses within what
-    # rail vehicles have, from a tram module to a loaded locomotive, so that a value typed in the
-    # wrong unit (tonnes, millimetres) is refused with the slip named
-    "VehicleParams.gravity_m_per_s2": Range(9.7, 9.9, unit="m/s^2", why="gravity on the Earth's surface"),
-    "VehicleParams.carbody_mass_kg": Range(2e3, 1.5e5, unit="kg", why="a carbody"),
-    "VehicleParams.bogie_mass_kg": Range(2e2, 2e4, unit="kg", why="a bogie frame"),
-    "VehicleParams.wheelset_mass_kg": Range(1e2, 5e3, unit="kg", why="a wheelset"),
-    "VehicleParams.bogie_centre_distance_m": Range(2.0, 40.0, unit="m", why="between the bogie centres"),
-    "VehicleParams.wheelbase_m": Range(1.0, 5.0, unit="m", why="a bogie's wheelbase"),
-    "VehicleParams.contact_spacing_m": Range(0.9, 1.8, unit="m", why="between the wheels' contact points, "
-                                                                     "gauges 1000-1676 mm"),
-    "VehicleParams.wheel_radius_m": Range(0.15, 0.8, unit="m", why="a wheel's rolling radius"),
-    "VehicleParams.primary_lateral_spacing_m": Range(0.5, 4.0, unit="m", why="across the car"),
-    "VehicleParams.airspring_lateral_spacing_m": Range(0.5, 4.0, unit="m", why="across the car"),
-    "VehicleParams.secondary_vertical_damper_lateral_spacing_m": Range(0.0, 4.0, unit="m", why="across the car"),
-    "VehicleParams.yaw_damper_lateral_spacing_m": Range(0.0, 4.0, unit="m", why="across the car"),
-    "VehicleParams.arb_link_spacing_m": Range(0.0, 4.0, unit="m", why="across the car; 0: no bar"),
-    "VehicleParams.arb_lever_arm_m": Range(0.0, 2.0, unit="m", why="the bar's lever; 0: no bar"),
-    **{f"VehicleParams.{name}": Range(0.0, 5.0, unit="m", why="a height above the rail top")
-       for name in ("airspring_lower_height_m", "airspring_upper_height_m", "floor_height_m", "carbody_cog_height_m",
-                    "bogie_cog_height_m", "secondary_lateral_damper_height_m", "yaw_damper_height_m",
-                    "traction_rod_height_m")},
-    **{f"VehicleParams.{name}": Range(0.0, 0.3, unit="m", why="a bumpstop's free travel")
-       for name in ("lateral_bumpstop_clearance_m", "vertical_bumpstop_clearance_m")},
-    **{f"VehicleParams.{body}_inertia_{axis}_kg_m2": Range(1.0, 1e8, False, True, "kg m^2", f"a {body}'s inertia")
-       for body in ("carbody", "bogie", "wheelset") for axis in ("xx", "yy", "zz")},
-    # stiffnesses and dampings: 0 (absent) or inf (rigid), else within what suspension elements
-    # have; a value in kN/m or kN s/m typed as N/m is a thousand times too small
-    **{f"VehicleParams.{f.name}": Range(1e3, 1e10, unit="N/m", why="a spring", zero_or_inf=True)
-       for f in dataclasses.fields(VehicleParams) if f.name.endswith("_N_per_m")
-       and not f.name.startswith("primary_stiffness")},
-    **{f"VehicleParams.{f.name}": Range(10.0, 1e7, unit="N s/m", why="a damper", zero_or_inf=True)
-       for f in dataclasses.fields(VehicleParams) if f.name.endswith("_N_s_per_m")},
-    **{f"VehicleParams.{f.name}": Range(1e3, 1e9, unit="N m/rad", why="a torsion spring", zero_or_inf=True)
-       for f in dataclasses.fields(VehicleParams) if f.name.endswith("_N_m_per_rad")},
-    **{f"VehicleParams.primary_stiffness_{axis}_N_per_m": Range(1e3, 1e10, unit="N/m", why="a primary spring")
-       for axis in "xyz"},
-    "VehicleParams.hertz_constant_N_per_m1_5": positive("N/m^1.5"),
-}
-
-#: Unit suffix -> range, for fields :data:`RANGES` does not name (longest suffix first):
+#: Unit suffix -> range, for fields that declare none (longest suffix first):
 #: quantities that only make sense positive (pressures are absolute).
 SUFFIX_RANGES: Tuple[Tuple[str, Range], ...] = (
     # rates first: a velocity ends in _s too, and its message must say m/s, not s
@@ -175,56 +45,61 @@ SUFFIX_RANGES: Tuple[Tuple[str, Range], ...] = (
     ("_K", positive("K")), ("_s", positive("s")), ("_Hz", positive("Hz")), ("_m3_per_sPa", positive("m^3/(s Pa)")),
 )
 
-#: Class -> range of every other number of that class.
-CLASS_RANGES: Dict[str, Range] = {
-    "VehicleParams": nonnegative(why="a vehicle parameter; 0: the component is absent"),
-    "TrackStructure": positive(why="a flexible track's mass, stiffness or damping"),
-}
-
-#: ``Class.field`` of list fields -> (must be non-empty, must hold no duplicates).
-LIST_RULES: Dict[str, Tuple[bool, bool]] = {
-}   # valve settings: check_valve_settings; a kind's experiment declares its own (FIELD_LIST_RULES)
-
-
-def _lookup(table: Mapping[str, Any], cls, name: str, attribute: str = "FIELD_RANGES"):
-    """The rule of field ``name`` of ``cls``: from the class's own ``attribute`` (a mapping a kind's
-    experiment dataclass declares, e.g. ``FIELD_RANGES = {"base_m": ...}``), else from ``table``
-    (``Class.field``), along the MRO."""
-    for klass in getattr(cls, "__mro__", ()):
-        rule = vars(klass).get(attribute, {}).get(name)
-        if rule is None:
-            rule = table.get(f"{klass.__name__}.{name}")
-        if rule is not None:
-            return rule
-    return None
+def _field(cls, name: str) -> Optional[dataclasses.Field]:
+    fields = {f.name: f for f in dataclasses.fields(cls)} if dataclasses.is_dataclass(cls) else {}
+    return fields.get(name)
 
 
 def range_of(cls, name: str) -> Optional[Range]:
-    """The range of field ``name`` of dataclass ``cls`` (None: any finite number)."""
-    rule = _lookup(RANGES, cls, name)
+    """The range of field ``name`` of dataclass ``cls``: the one the field declares in its metadata
+    (:func:`pneumorail.quantities.plausible`), else its unit suffix's (:data:`SUFFIX_RANGES`);
+    None: any finite number."""
+    f = _field(cls, name)
+    rule = range_of_field(f) if f is not None else None
     if rule is not None:
         return rule
     for suffix, rule in SUFFIX_RANGES:
         if name.endswith(suffix):
             return rule
-    for klass in getattr(cls, "__mro__", ()):
-        if klass.__name__ in CLASS_RANGES:
-            return CLASS_RANGES[klass.__name__]
     return None
 
 
-#: unit slips a value out of its range may be: (unit, factor to the right unit, what was typed)
-UNIT_SLIPS = (("kg", 1e3, "tonnes"), ("m", 1e-3, "millimetres"), ("m", 1e-2, "centimetres"),
-              ("kg m^2", 1e3, "t m^2"), ("m^2", 1e-4, "cm^2"), ("N/m", 1e3, "kN/m"), ("N s/m", 1e3, "kN s/m"),
-              ("N m/rad", 1e3, "kN m/rad"))
+def list_rule_of(cls, name: str) -> Optional[Tuple[bool, bool]]:
+    """(non-empty, no duplicates) of list field ``name`` of ``cls`` (its metadata; None: no rule)."""
+    f = _field(cls, name)
+    return list_rule_of_field(f) if f is not None else None
+
+
+class UnitSlip(NamedTuple):
+    """A unit a user may have typed instead of the field's ``unit``: the value in the right unit is
+    ``value * factor + offset``."""
+
+    unit: str
+    factor: float
+    typed: str
+    offset: float = 0.0
+
+
+#: unit slips a value out of its range may be, tried in this order (the first that brings the
+#: value into its range is named)
+UNIT_SLIPS = (UnitSlip("kg", 1e3, "tonnes"), UnitSlip("m", 1e-3, "millimetres"), UnitSlip("m", 1e-2, "centimetres"),
+              UnitSlip("m", 1e3, "kilometres"), UnitSlip("kg m^2", 1e3, "t m^2"), UnitSlip("m^2", 1e-4, "cm^2"),
+              UnitSlip("m^3", 1e-3, "litres"), UnitSlip("N/m", 1e3, "kN/m"), UnitSlip("N/m", 1e6, "MN/m"),
+              UnitSlip("N s/m", 1e3, "kN s/m"), UnitSlip("N m/rad", 1e3, "kN m/rad"), UnitSlip("N m/rad", 1e6, "MN m/rad"),
+              UnitSlip("N m s/rad", 1e3, "kN m s/rad"),
+              *(UnitSlip(pa, factor, typed) for pa in ("Pa absolute", "Pa") for factor, typed in ((1e5, "bar"), (1e3, "kPa"))),
+              UnitSlip("rad", math.pi / 180.0, "degrees"), UnitSlip("s", 1e-3, "milliseconds"),
+              UnitSlip("m/s", 1.0 / 3.6, "km/h"), UnitSlip("K", 1.0, "degrees Celsius", 273.15))
 
 
 def unit_slip(value: float, rule: Range) -> str:
     """A hint when ``value`` out of ``rule`` would be in it in the unit a user may have typed
-    instead (tonnes for kg, millimetres for m ...): ``"; tonnes? (26 t = 26000 kg)"``."""
-    for unit, factor, typed in UNIT_SLIPS:
-        if rule.unit == unit and value != 0 and rule.admits(value * factor):
-            return f"; {typed}? ({_num(value)} {typed} = {_num(value * factor)} {unit})"
+    instead (tonnes for kg, millimetres for m, bar for Pa ...): ``"; tonnes? (26 tonnes = 26000
+    kg)"``."""
+    for slip in UNIT_SLIPS:
+        right = value * slip.factor + slip.offset
+        if rule.unit == slip.unit and value != 0 and rule.admits(right):
+            return f"; {slip.typed}? ({_num(value)} {slip.typed} = {_num(right)} {slip.unit})"
     return ""
 
 
@@ -347,7 +222,7 @@ def build(cls, data: Any, file, path: Sequence[str], **fixed):
         if isinstance(value, tuple):
             for i, v in enumerate(value):
                 check_range(v, rule, file, _item_path(where, i))
-            check_list(value, _lookup(LIST_RULES, cls, name, "FIELD_LIST_RULES"), file, where)
+            check_list(value, list_rule_of(cls, name), file, where)
         elif isinstance(value, float) and math.isinf(value):      # only where the default is .inf
             if value != f.default:
                 raise ScenarioError(file, where, f"expected a finite number or .inf, got {value}")

@@ -60,7 +60,7 @@ def test_wrong_type(tmp_path):
 
 def test_negative_volume(tmp_path):
     err = error_for(tmp_path, rig(**{"circuit.tank.V_m3": -0.027}))
-    assert err.path == "circuit.tank.V_m3" and "> 0" in err.reason
+    assert err.path == "circuit.tank.V_m3" and "[0.001, 10] m^3" in err.reason
 
 
 def test_negative_k(tmp_path):
