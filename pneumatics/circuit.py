@@ -24,6 +24,10 @@ State vector (one column per independent case when batched; see :class:`StateLay
                    the valves with a play, then the delay-chain stages of the valves with a
                    delay (valve by valve, input side first), then the lagged lever u_f of
                    the valves with a lag; each group in the order of ``valve_names``
+``governor``       each compressor's governor, 1.0 running, 0.0 stopped (a discrete
+                   state: :meth:`Circuit.update_governors` switches it between steps;
+                   absent without compressors)
+``run_time``       each compressor's cumulative running time [s]
 =================  =========================================================
 
 The groups up to ``enthalpy_in`` sit where they always did: the valve groups are appended, so a

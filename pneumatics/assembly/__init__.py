@@ -4,7 +4,7 @@
 (:mod:`.heat`), the nodes (:mod:`.nodes`) and the chambers' geometry (:mod:`.chambers`), the
 faults (:mod:`.faults`), the links from the table of link types (:mod:`.link_types`,
 :mod:`.links`), the numbers of each flow law (:mod:`.laws`, with the valves' response dynamics,
-:mod:`.valve_dynamics`), the state layout (:mod:`.layout`) and what the active faults change.
+:mod:`.valve_dynamics`; the compressors and air demands), the state layout (:mod:`.layout`) and what the active faults change.
 An error in the description is a :class:`~pneumatics.errors.CircuitError` naming the field.
 The evaluation at a state is :class:`pneumatics.runtime.CircuitRuntime`'s.
 """
@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import FrozenSet, Mapping, Sequence, Tuple
 
+from ..air_supply import free_air_density_kg_per_m3, normal_density_kg_per_m3
 from ..boundary import Atmosphere
 from ..faults import Fault
 from ..gas import AIR, Gas
@@ -21,11 +22,13 @@ from .chambers import ChamberGeometry, compile_chambers
 from .faults import ActiveFaults, check_faults, compile_active_faults, fault_openings
 from .heat import HeatExchange, compile_heat_exchange
 from .laws import (
+    AirSupply,
     DifferentialValves,
     DynamicPipes,
     LevellingValves,
     OrificeLinks,
     QuasiSteadyPipes,
+    compile_air_supply,
     compile_differential_valves,
     compile_dynamic_pipes,
     compile_levelling_valves,
@@ -61,6 +64,7 @@ class Assembly:
     valves: LevellingValves
     active: ActiveFaults
     layout: StateLayout
+    air_supply: AirSupply
 
     @property
     def fault_links(self) -> slice:
@@ -83,9 +87,12 @@ def assemble(components: Mapping[str, object], *, gas: Gas = AIR, atmosphere: At
     valves = compile_levelling_valves(links, nodes)
     pipes = compile_dynamic_pipes(links)
     n_pipes = pipes.links.stop - pipes.links.start
-    layout = StateLayout(len(nodes.chamber_names), n_pipes, len(links.names), valves.count, valves.dynamics.n_states)
+    air_supply = compile_air_supply(links, free_air_density_kg_per_m3(atmosphere.p_Pa, atmosphere.T_K, gas.R_J_per_kgK),
+                                    normal_density_kg_per_m3(gas.R_J_per_kgK))
+    layout = StateLayout(len(nodes.chamber_names), n_pipes, len(links.names), valves.count, valves.dynamics.n_states,
+                         air_supply.n_compressors)
     effects = compile_active_faults(faults, active, compiled, links.names, links.a, links.b, links.rows["fault_opening"],
                                     nodes.index, valves.names, n_pipes)
     return Assembly(MappingProxyType(compiled), gas, atmosphere, faults, active, heat, nodes, chambers, links, pipes,
                     compile_quasi_steady_pipes(links), compile_orifice_links(links), compile_differential_valves(links),
-                    valves, effects, layout)
+                    valves, effects, layout, air_supply)

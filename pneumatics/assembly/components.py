@@ -2,6 +2,7 @@
 surroundings, and the words error messages call them by."""
 from __future__ import annotations
 
+from ..air_supply import AirDemand, Compressor
 from ..boundary import Supply
 from ..chamber import Bellow, Tank
 from ..orifice import Orifice
@@ -18,6 +19,8 @@ COMPONENT_TYPES = {
     "levelling_valve": LevellingValve,
     "safety_valve": SafetyValve,
     "differential_valve": DifferentialPressureValve,
+    "compressor": Compressor,
+    "air_demand": AirDemand,
 }
 
 #: the node name of the surroundings (:class:`~pneumatics.boundary.Atmosphere`), reserved
@@ -25,7 +28,8 @@ ATMOSPHERE = "atmosphere"
 
 #: component class -> what messages call it
 TYPE_WORDS = {Bellow: "bellow", Tank: "tank", Supply: "supply", Pipe: "pipe", Orifice: "orifice",
-              LevellingValve: "levelling or safety valve", DifferentialPressureValve: "differential valve"}
+              LevellingValve: "levelling or safety valve", DifferentialPressureValve: "differential valve",
+              Compressor: "compressor", AirDemand: "air demand"}
 
 
 def type_word(comp) -> str:

@@ -82,6 +82,41 @@ class LevellingValves:
         return len(self.names)
 
 
+@dataclass(frozen=True, eq=False)
+class AirSupply:
+    """The compressors and air demands (:mod:`pneumatics.air_supply`): the compressors' links,
+    their reservoirs' chamber rows, mass flow while running [kg/s], cut-in and cut-out pressures
+    [Pa] and governor states at t = 0 (compressors, 1); the demands' links, their nodes' rows,
+    full mass flows [kg/s] and fade-out widths [Pa] (demands, 1)."""
+
+    n_compressors: int
+    compressor_links: slice
+    reservoir: np.ndarray
+    w_compressor_kg_per_s: np.ndarray
+    p_cut_in_Pa: np.ndarray
+    p_cut_out_Pa: np.ndarray
+    running_at_start: np.ndarray
+    demand_links: slice
+    demand_node: np.ndarray
+    w_demand_kg_per_s: np.ndarray
+    dp_off_Pa: np.ndarray
+
+    @property
+    def present(self) -> bool:
+        return bool(self.n_compressors or self.demand_node.size)
+
+
+def compile_air_supply(links: Links, rho_free_kg_per_m3: float, rho_normal_kg_per_m3: float) -> AirSupply:
+    """The numbers of the compressors' and demands' laws (``rho_free``: the density of the air a
+    compressor takes in; ``rho_normal``: of a normal cubic metre)."""
+    rows_c, rows_d = links.rows["compressor"], links.rows["air_demand"]
+    fad, cut_in, cut_out, start = _columns(links.parameters["compressor"], 4)
+    q_n, dp_off = _columns(links.parameters["air_demand"], 2)
+    return AirSupply(rows_c.stop - rows_c.start, rows_c, read_only(links.b[rows_c].copy()), column(rho_free_kg_per_m3 * fad),
+                     cut_in, cut_out, start, rows_d, read_only(links.a[rows_d].copy()), column(rho_normal_kg_per_m3 * q_n),
+                     dp_off)
+
+
 def compile_dynamic_pipes(links: Links) -> DynamicPipes:
     """The numbers of eq. (5) over the dynamic pipes."""
     sl = links.rows["pipe"]

@@ -16,6 +16,7 @@ class StateLayout:
     n_links: int
     n_valves: int = 0
     n_valve_states: int = 0
+    n_compressors: int = 0
 
     @cached_property
     def m(self) -> slice:
@@ -59,8 +60,20 @@ class StateLayout:
         return slice(start, start + self.n_valve_states)
 
     @cached_property
+    def governor(self) -> slice:
+        """Each compressor's governor: 1.0 running, 0.0 stopped (switched between steps)."""
+        start = self.valve_signal.stop
+        return slice(start, start + self.n_compressors)
+
+    @cached_property
+    def run_time(self) -> slice:
+        """Each compressor's cumulative running time [s]."""
+        start = self.governor.stop
+        return slice(start, start + self.n_compressors)
+
+    @cached_property
     def size(self) -> int:
-        return self.heat_in + 3 + 2 * self.n_valves + self.n_valve_states
+        return self.heat_in + 3 + 2 * self.n_valves + self.n_valve_states + 2 * self.n_compressors
 
     @cached_property
     def n_dynamic(self) -> int:

@@ -14,7 +14,12 @@ link type (``key``)   from                    link name                    law's
 ``differential``      differential valve      ``<valve>``                  table q(|dp|)
 ``valve_supply``      levelling/safety valve  ``<valve>.supply``           table C(u), b
 ``valve_exhaust``     levelling/safety valve  ``<valve>.exhaust``          table C(-u), b
+``compressor``        compressor              ``<compressor>``             w when running, cut-in, out
+``air_demand``        air demand              ``<demand>``                 w, dp_off
 ====================  ======================  ===========================  ==================
+
+A compressor's link runs from its intake (a boundary node named after it) into its reservoir,
+a demand's from its node to its exhaust (likewise): :mod:`pneumatics.air_supply`.
 """
 from __future__ import annotations
 
@@ -22,6 +27,7 @@ from typing import Mapping, NamedTuple, Sequence, Tuple
 
 import numpy as np
 
+from ..air_supply import AirDemand, Compressor
 from ..errors import CircuitError
 from ..orifice import Orifice
 from ..pipe import Pipe
@@ -220,9 +226,56 @@ class ValveExhaustLinks(LinkType):
         return valve.exhaust_lever_m, valve.exhaust_C_m3_per_sPa, valve.b_critical
 
 
+class CompressorLinks(LinkType):
+    """Compressors: from the intake into the reservoir, the free air delivery while the governor
+    runs it (:mod:`pneumatics.air_supply`)."""
+
+    key = "compressor"
+    positive = ("free_air_delivery_m3_per_s", "p_cut_in_Pa", "p_cut_out_Pa")
+
+    def takes(self, comp) -> bool:
+        return isinstance(comp, Compressor)
+
+    def ends(self, name: str, comp: Compressor) -> LinkEnds:
+        return LinkEnds(name, name, "intake", name, "reservoir", comp.reservoir)
+
+    def check_nodes(self, name: str, comp: Compressor, nodes: Nodes) -> None:
+        nodes.node(name, "reservoir", comp.reservoir, chambers_only=True)
+
+    def parameters(self, name: str, comp: Compressor) -> tuple:
+        return comp.free_air_delivery_m3_per_s, comp.p_cut_in_Pa, comp.p_cut_out_Pa, comp.running_at_start
+
+    def check_more(self, name: str, comp: Compressor) -> None:
+        if not comp.p_cut_in_Pa < comp.p_cut_out_Pa:
+            raise CircuitError([name, "p_cut_out_Pa"], f"must be above p_cut_in_Pa ({comp.p_cut_in_Pa:g} Pa), "
+                                                       f"got {comp.p_cut_out_Pa:g} Pa")
+        if comp.T_delivery_K is not None and not comp.T_delivery_K > 0:
+            raise CircuitError([name, "T_delivery_K"], f"must be > 0 K (absolute), got {comp.T_delivery_K}")
+
+
+class AirDemandLinks(LinkType):
+    """Air demands: from their node to their exhaust, a steady normal flow that fades out near
+    the atmosphere's pressure (:mod:`pneumatics.air_supply`)."""
+
+    key = "air_demand"
+    positive = ("normal_flow_m3_per_s", "dp_off_Pa")
+
+    def takes(self, comp) -> bool:
+        return isinstance(comp, AirDemand)
+
+    def ends(self, name: str, demand: AirDemand) -> LinkEnds:
+        return LinkEnds(name, name, "node", demand.node, "exhaust", name)
+
+    def check_nodes(self, name: str, demand: AirDemand, nodes: Nodes) -> None:
+        nodes.node(name, "node", demand.node, chambers_only=True)
+
+    def parameters(self, name: str, demand: AirDemand) -> tuple:
+        return demand.normal_flow_m3_per_s, demand.dp_off_Pa
+
+
 #: every link type, in the order of the circuit's links
 LINK_TYPES = (DynamicPipeLinks(), QuasiSteadyPipeLinks(), OrificeLinks(), FaultOpeningLinks(), DifferentialValveLinks(),
-              ValveSupplyLinks(), ValveExhaustLinks())
+              ValveSupplyLinks(), ValveExhaustLinks(), CompressorLinks(), AirDemandLinks())
 
 #: the pipe models, one link type each
 PIPE_MODELS = (DynamicPipeLinks.model, QuasiSteadyPipeLinks.model)

@@ -1,5 +1,7 @@
 """The circuit's nodes: the chambers that hold air (bellows, tanks, finite supplies), then the
-boundary nodes whose pressure and temperature are given (the atmosphere, fixed supplies)."""
+boundary nodes whose pressure and temperature are given (the atmosphere, fixed supplies, and
+each compressor's intake and each air demand's exhaust, named after the component:
+:mod:`pneumatics.air_supply`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -7,6 +9,7 @@ from typing import Mapping, Tuple
 
 import numpy as np
 
+from ..air_supply import AirDemand, Compressor
 from ..boundary import Atmosphere, Supply
 from ..chamber import Bellow, Tank
 from ..errors import CircuitError
@@ -61,6 +64,10 @@ def classify_nodes(components: Mapping[str, object], atmosphere: Atmosphere) -> 
             chambers.append(name)
         elif isinstance(comp, Supply):
             boundary.append((name, comp.p_Pa, comp.T_K or atmosphere.T_K))
+        elif isinstance(comp, Compressor):             # its intake: the air it delivers comes from here
+            boundary.append((name, atmosphere.p_Pa, comp.T_delivery_K or atmosphere.T_K))
+        elif isinstance(comp, AirDemand):              # its exhaust: the air it draws goes there
+            boundary.append((name, atmosphere.p_Pa, atmosphere.T_K))
     bellows = tuple(n for n in chambers if isinstance(components[n], Bellow))
     names = chambers + [b[0] for b in boundary]
     return Nodes(tuple(chambers), bellows, tuple(b[0] for b in boundary), {n: i for i, n in enumerate(names)},

@@ -1,0 +1,97 @@
+"""The air supply beyond the suspension: a compressor that fills the main reservoir under a
+pressure governor, and the other consumers (brakes, doors) as a steady demand.
+
+Sign convention as everywhere in the circuit: a link's mass flow w is positive from its ``a`` node
+to its ``b`` node. A compressor is a link from its intake (a boundary node named after it, at the
+atmosphere's pressure and the delivery temperature) into its ``reservoir`` (a chamber: a finite
+``supply`` or a tank); a demand is a link from its ``node`` to its exhaust (a boundary node named
+after it, at the atmosphere's conditions).
+
+Compressor (free air delivery, ISO 1217: the volume flow the compressor takes in, at the intake's
+conditions)::
+
+    w_c = s rho_free FAD,      rho_free = p_atm / (R T_atm)
+
+with s the governor's state (1 running, 0 stopped): a relay with hysteresis on the reservoir's
+pressure p_r, ``p_cut_in_Pa`` < ``p_cut_out_Pa``::
+
+    s -> 1 when p_r <= p_cut_in,   s -> 0 when p_r >= p_cut_out,   s held in between.
+
+The governor is a discrete state: it switches between the integrator's steps
+(:meth:`pneumatics.runtime.CircuitRuntime.update_governors`), so a switching instant is resolved
+to within one pneumatic step h (an error of order h in the duty cycle's period, h / period
+relative: 1e-6 for a 1 ms step and cycles of minutes). The compressed air arrives after the
+aftercooler at ``T_delivery_K`` (None: the atmosphere's temperature, assumed).
+
+Demand (normal volume flow, DIN 1343: 273.15 K, 101 325 Pa)::
+
+    w_d = rho_N Q_N ramp((p - p_atm) / dp_off),   rho_N = 101325 / (R 273.15),
+    ramp(x) = min(1, max(0, x))
+
+a consumer drawing its air at a steady rate as long as the node holds it: below ``dp_off_Pa``
+above the atmosphere the draw fades to nothing instead of emptying the node into a vacuum (a
+model choice: brake and door equipment stop taking air as their supply pressure fails).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+#: DIN 1343 normal conditions [K], [Pa]: a normal litre (Nl) is a litre of air at these
+NORMAL_T_K = 273.15
+NORMAL_P_PA = 101_325.0
+
+
+@dataclass(frozen=True)
+class Compressor:
+    """A compressor under a pressure governor filling ``reservoir`` (a chamber: a finite supply
+    or a tank). ``free_air_delivery_m3_per_s``: the volume of air it takes in per second at the
+    atmosphere's conditions (ISO 1217; a metro car's compressor: ~1 m^3/min = 0.0167 m^3/s,
+    assumed). Cut-in and cut-out: absolute pressures of the reservoir at which the governor
+    starts and stops it (defaults 8.5 and 10 bar absolute: a main reservoir kept at 7.5-9 bar
+    gauge, assumed). ``running_at_start``: the governor's state at t = 0 when the reservoir
+    starts between the two (below cut-in it runs, above cut-out it does not, whatever this says).
+    ``T_delivery_K``: the air's temperature after the aftercooler (None: the atmosphere's)."""
+
+    reservoir: str = "supply"
+    free_air_delivery_m3_per_s: float = 1.0 / 60.0
+    p_cut_in_Pa: float = 8.5e5
+    p_cut_out_Pa: float = 10.0e5
+    running_at_start: bool = False
+    T_delivery_K: Optional[float] = None
+
+
+@dataclass(frozen=True)
+class AirDemand:
+    """Other consumers drawing air from ``node`` (brakes, doors): a steady normal volume flow
+    ``normal_flow_m3_per_s`` (DIN 1343; 100 Nl/min = 1.667e-3 m^3/s), fading to nothing within
+    ``dp_off_Pa`` of the atmosphere's pressure."""
+
+    node: str = "supply"
+    normal_flow_m3_per_s: float = 1.0e-3
+    dp_off_Pa: float = 2.0e4
+
+
+def free_air_density_kg_per_m3(p_atm_Pa, T_atm_K, R_J_per_kgK):
+    """Density of the air a compressor takes in [kg/m^3]: the atmosphere's."""
+    return p_atm_Pa / (R_J_per_kgK * T_atm_K)
+
+
+def normal_density_kg_per_m3(R_J_per_kgK):
+    """Density of air at DIN 1343 normal conditions [kg/m^3] (1.292 for R = 287.05)."""
+    return NORMAL_P_PA / (R_J_per_kgK * NORMAL_T_K)
+
+
+def governor(running, p_reservoir_Pa, p_cut_in_Pa, p_cut_out_Pa):
+    """The governor's next state (1.0 running, 0.0 stopped) from its state and the reservoir's
+    pressure: on at or below cut-in, off at or above cut-out, held in between."""
+    running = np.where(p_reservoir_Pa <= p_cut_in_Pa, 1.0, running)
+    return np.where(p_reservoir_Pa >= p_cut_out_Pa, 0.0, running)
+
+
+def demand_flow_kg_per_s(w_max_kg_per_s, p_Pa, p_atm_Pa, dp_off_Pa):
+    """A demand's mass flow [kg/s]: its full rate, faded out linearly within ``dp_off_Pa`` of
+    the atmosphere's pressure."""
+    return w_max_kg_per_s * np.clip((p_Pa - p_atm_Pa) / dp_off_Pa, 0.0, 1.0)
