@@ -17,11 +17,14 @@ pressure p_r, ``p_cut_in_Pa`` < ``p_cut_out_Pa``::
 
     s -> 1 when p_r <= p_cut_in,   s -> 0 when p_r >= p_cut_out,   s held in between.
 
-The governor is a discrete state: it switches between the integrator's steps
-(:meth:`pneumatics.runtime.CircuitRuntime.update_governors`), so a switching instant is resolved
-to within one pneumatic step h (an error of order h in the duty cycle's period, h / period
-relative: 1e-6 for a 1 ms step and cycles of minutes). The compressed air arrives after the
-aftercooler at ``T_delivery_K`` (None: the atmosphere's temperature, assumed).
+The governor is a discrete state: it switches between the integrator's fixed steps
+(:meth:`pneumatics.runtime.CircuitRuntime.update_governors`), at the end of the step in which
+the pressure crossed its threshold. The reservoir overshoots the cut-out by up to one step's
+filling, (w_c - w_d) h, which the off phase takes (w_c - w_d) h / w_d longer to draw: the
+period is O(h) off, by at most h (2 + w_d / (w_c - w_d) + (w_c - w_d) / w_d) (0.17 s of a
+147 s cycle at h = 10 ms; the co-simulation's pneumatic step is ~1 ms). The compressed air
+arrives after the aftercooler at ``T_delivery_K`` (None: the atmosphere's temperature,
+assumed).
 
 Demand (normal volume flow, DIN 1343: 273.15 K, 101 325 Pa)::
 
@@ -34,10 +37,14 @@ model choice: brake and door equipment stop taking air as their supply pressure 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
+
+from pneumorail.quantities import plausible, ranged
+
+from .gas import ABSOLUTE_PRESSURE, AIR_TEMPERATURE
 
 #: DIN 1343 normal conditions [K], [Pa]: a normal litre (Nl) is a litre of air at these
 NORMAL_T_K = 273.15
@@ -56,11 +63,14 @@ class Compressor:
     ``T_delivery_K``: the air's temperature after the aftercooler (None: the atmosphere's)."""
 
     reservoir: str = "supply"
-    free_air_delivery_m3_per_s: float = 1.0 / 60.0
-    p_cut_in_Pa: float = 8.5e5
-    p_cut_out_Pa: float = 10.0e5
+    # railway compressors deliver 0.2-5 m^3/min of free air (metro car ~1, a locomotive's ~5); a
+    # value in m^3/min or l/min falls out
+    free_air_delivery_m3_per_s: float = field(default=1.0 / 60.0, metadata=plausible(
+        1e-4, 0.5, "m^3/s", "a compressor's free air delivery, 6 l/min to 30 m^3/min"))
+    p_cut_in_Pa: float = field(default=8.5e5, metadata=ranged(ABSOLUTE_PRESSURE))
+    p_cut_out_Pa: float = field(default=10.0e5, metadata=ranged(ABSOLUTE_PRESSURE))
     running_at_start: bool = False
-    T_delivery_K: Optional[float] = None
+    T_delivery_K: Optional[float] = field(default=None, metadata=ranged(AIR_TEMPERATURE))
 
 
 @dataclass(frozen=True)
@@ -70,8 +80,11 @@ class AirDemand:
     ``dp_off_Pa`` of the atmosphere's pressure."""
 
     node: str = "supply"
-    normal_flow_m3_per_s: float = 1.0e-3
-    dp_off_Pa: float = 2.0e4
+    # brakes and doors of a car draw tens to a few hundred Nl/min on average; up to 30 Nm^3/min
+    normal_flow_m3_per_s: float = field(default=1.0e-3, metadata=plausible(
+        0.0, 0.5, "m^3/s", "a normal volume flow, up to 30 Nm^3/min", low_inclusive=False))
+    dp_off_Pa: float = field(default=2.0e4, metadata=plausible(1e2, 5e5, "Pa", "the pressure over which the draw fades "
+                                                                                "out near the atmosphere's"))
 
 
 def free_air_density_kg_per_m3(p_atm_Pa, T_atm_K, R_J_per_kgK):

@@ -18,6 +18,7 @@ from typing import Callable, Tuple
 import numpy as np
 
 from .circuit import Circuit
+from .errors import CircuitError
 
 #: motion(t_s) -> (z_m, zdot_m_per_s), each shaped (bellows,) or (bellows, cases)
 Motion = Callable[[float], Tuple[np.ndarray, np.ndarray]]
@@ -39,11 +40,14 @@ def stable_step_s(circuit: Circuit, x: np.ndarray, h_max_s: float = 1e-3, couran
 
 
 def rk4(f: Callable[[float, np.ndarray], np.ndarray], x: np.ndarray, t0_s: float, t1_s: float, n_steps: int,
-        observe: Callable[[float, np.ndarray], None] | None = None, rate0: np.ndarray | None = None) -> np.ndarray:
+        observe: Callable[[float, np.ndarray], None] | None = None, rate0: np.ndarray | None = None,
+        switch: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     """Classical fixed-step RK4 of dx/dt = f(t, x) over [t0, t1] in ``n_steps`` equal steps.
 
     ``observe(t, x)`` is called after every step (for recording a trajectory). ``rate0``, if given,
     must be f(t0, x): the first stage of the first step takes it instead of evaluating f again.
+    ``switch(x)``: the discrete states switched after every step (the compressors' governors);
+    when it switches one, the next step's first stage is evaluated afresh.
     """
     h = (t1_s - t0_s) / n_steps
     t = t0_s
@@ -53,6 +57,8 @@ def rk4(f: Callable[[float, np.ndarray], np.ndarray], x: np.ndarray, t0_s: float
         k3 = f(t + 0.5 * h, x + 0.5 * h * k2)
         k4 = f(t + h, x + h * k3)
         x = x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+        if switch is not None:
+            x = switch(x)
         t = t0_s + (i + 1) * h
         if observe is not None:
             observe(t, x)
@@ -72,7 +78,8 @@ def advance(circuit: Circuit, x: np.ndarray, t0_s: float, t1_s: float, motion: M
     """Integrate from t0 to t1 with classical RK4 in equal sub-steps no longer than ``h_max_s``.
     ``rate0``: the derivative at (t0, x) under ``motion(t0)``, if already known (see :func:`rk4`)."""
     n = max(1, math.ceil((t1_s - t0_s) / h_max_s - 1e-9))
-    return rk4(circuit_rhs(circuit, motion), x, t0_s, t1_s, n, rate0=rate0)
+    switch = circuit.update_governors if circuit.has_governors else None
+    return rk4(circuit_rhs(circuit, motion), x, t0_s, t1_s, n, rate0=rate0, switch=switch)
 
 
 def absolute_tolerances(circuit: Circuit, rtol: float) -> np.ndarray:
@@ -96,6 +103,10 @@ def simulate(circuit: Circuit, x0: np.ndarray, t_end_s: float, motion: Motion, *
     a chamber stops being physical (see Circuit.physical_margin) instead of crawling on."""
     from scipy.integrate import solve_ivp  # here: importing it costs ~0.15 s that co-simulations never need
 
+    if circuit.has_governors:
+        raise CircuitError([circuit.compressor_names[0]], "a compressor's governor switches between fixed steps: "
+                                                          "integrate this circuit with advance (the co-simulation's "
+                                                          "integrator), not the adaptive one")
     def non_physical(t, x):
         return circuit.physical_margin(x, motion(t)[0])
     non_physical.terminal = True

@@ -16,6 +16,7 @@ from typing import Mapping, NamedTuple, Optional
 
 import numpy as np
 
+from .air_supply import demand_flow_kg_per_s, governor
 from .assembly import Assembly
 from .boundary import Supply
 from .chamber import (
@@ -100,6 +101,13 @@ class CircuitRuntime:
         self._differential, self._valves, self._dynamics = assembly.differential_valves, assembly.valves, assembly.valves.dynamics
         self._active = assembly.active
         self._n_valves, self._n_bellows = len(self.valve_names), len(self.bellow_names)
+        self._air = assembly.air_supply
+        #: the compressors and the air demands (:mod:`pneumatics.air_supply`), in state order
+        self.compressor_names = links.names_of("compressor")
+        self.demand_names = links.names_of("air_demand")
+        self._air_supply_nodes = {nodes.index[n] for n in self.compressor_names + self.demand_names}
+        self._air_supply_links = np.r_[np.arange(self._air.compressor_links.start, self._air.compressor_links.stop),
+                                       np.arange(self._air.demand_links.start, self._air.demand_links.stop)].astype(int)
         self._boundary_columns = {}   # n_cases -> boundary columns repeated (cached)
         self._outflow_signs = {}      # mass_from's link signs by node (cached)
 
@@ -130,6 +138,9 @@ class CircuitRuntime:
                 raise CircuitError([n, "T0_K"], "an isothermal (k = inf) chamber must start at the atmosphere's temperature")
             x[lay.T][i] = T
             x[lay.m][i] = self.gas.mass_kg(p, T, self._chambers.V0_m3[i, 0])
+        air = self._air
+        if air.n_compressors:                      # each governor as its reservoir's pressure has it
+            x[lay.governor] = self._governors(x[:, None], air.running_at_start)[:, 0]
         if n_cases is None and self.k_W_per_K.ndim:
             n_cases = self.k_W_per_K.size
         return x if n_cases is None else np.repeat(x[:, None], n_cases, axis=1)
@@ -183,6 +194,11 @@ class CircuitRuntime:
         if C.size:
             ia, ib = orifices.a, orifices.b
             w[orifices.links] = orifice_flow_kg_per_s(C, orifices.b_critical, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
+        air = self._air
+        if air.present:                                    # compressors (governed) and demands
+            w[air.compressor_links] = x2[lay.governor] * air.w_compressor_kg_per_s
+            w[air.demand_links] = demand_flow_kg_per_s(air.w_demand_kg_per_s, p_n[air.demand_node],
+                                                       self.atmosphere.p_Pa, air.dp_off_Pa)
         blocked = self._active.blocked_links
         if blocked is not None:                            # faults: links that carry nothing
             w[blocked] = 0.0
@@ -259,6 +275,9 @@ class CircuitRuntime:
         dx[lay.enthalpy_in] = links.boundary_sign @ Hw
         if self._n_valves:
             np.sign(C_valve, out=dx[lay.open_time])  # C >= 0 (tables checked): 1 while open, 0 when shut
+        if self._air.n_compressors:
+            dx[lay.governor] = 0.0                   # switched between steps (update_governors)
+            dx[lay.run_time] = x2[lay.governor]
         return dx, (m, T, p, mdot, Hdot, chain)
 
     def _write_crushing_rate_terms(self, dx: np.ndarray, x2: np.ndarray, terms, zdot2: np.ndarray) -> None:
@@ -360,12 +379,17 @@ class CircuitRuntime:
 
     def mass_from(self, x, node: str) -> np.ndarray:
         """Cumulative mass that left boundary node ``node`` into the circuit (negative: received)
-        [kg], through every link but the faults' openings (:meth:`air_lost_kg` counts those)."""
+        [kg], through every link but the faults' openings (:meth:`air_lost_kg` counts those) and,
+        unless ``node`` is a compressor's intake or a demand's exhaust, but the compressors' and
+        demands' links (:meth:`compressor_air_kg`, :meth:`demand_air_kg` count those): the air a
+        finite supply gives the suspension is what leaves it towards the valves."""
         sign = self._outflow_signs.get(node)
         if sign is None:
             i = self._nodes.index[node]
             sign = (self._links.a == i).astype(float) - (self._links.b == i).astype(float)
             sign[self.fault_links] = 0.0
+            if i not in self._air_supply_nodes:
+                sign[self._air_supply_links] = 0.0
             self._outflow_signs[node] = sign
         return sign @ x[self.layout.mass_through]
 
@@ -381,6 +405,50 @@ class CircuitRuntime:
         delivers is moved, not gained)."""
         inflow = sum(self.mass_from(x, node) for node in self.boundary_names)
         return inflow - self.air_lost_kg(x)
+
+    def compressor_air_kg(self, x) -> np.ndarray:
+        """Cumulative air each compressor delivered [kg], (compressors[, cases])."""
+        return x[self.layout.mass_through][self._air.compressor_links]
+
+    def compressor_running(self, x) -> np.ndarray:
+        """Each compressor's governor: 1.0 running, 0.0 stopped, (compressors[, cases])."""
+        return x[self.layout.governor]
+
+    def compressor_run_time_s(self, x) -> np.ndarray:
+        """Each compressor's cumulative running time [s], (compressors[, cases])."""
+        return x[self.layout.run_time]
+
+    def demand_air_kg(self, x) -> np.ndarray:
+        """Cumulative air each demand drew [kg], (demands[, cases])."""
+        return x[self.layout.mass_through][self._air.demand_links]
+
+    def _governors(self, x2: np.ndarray, running: np.ndarray) -> np.ndarray:
+        """The governors' next states (compressors, cases) from ``running`` and their reservoirs'
+        pressures in state ``x2`` (a reservoir is a rigid chamber: its nominal volume)."""
+        air, lay = self._air, self.layout
+        i = air.reservoir
+        p = x2[lay.m][i] * self.gas.R_J_per_kgK * x2[lay.T][i] / self._chambers.V0_m3[i]
+        return governor(running, p, air.p_cut_in_Pa, air.p_cut_out_Pa)
+
+    @property
+    def has_governors(self) -> bool:
+        """The circuit has compressors, whose governors switch between the integrator's steps."""
+        return bool(self._air.n_compressors)
+
+    def update_governors(self, x) -> np.ndarray:
+        """``x`` with each compressor's governor switched as its reservoir's pressure now says
+        (:func:`pneumatics.air_supply.governor`): the integrator calls it after every step. A
+        circuit without compressors returns ``x`` itself."""
+        if not self._air.n_compressors:
+            return x
+        lay = self.layout
+        x2 = x.reshape(lay.size, -1)
+        new = self._governors(x2, x2[lay.governor])
+        if np.array_equal(new, x2[lay.governor]):
+            return x
+        x = x.copy()
+        x.reshape(lay.size, -1)[lay.governor] = new
+        return x
 
     def air_lost_kg(self, x) -> np.ndarray:
         """Cumulative air lost to the atmosphere through the faults' openings (bursts, leaks,

@@ -241,6 +241,9 @@ class CompressorLinks(LinkType):
 
     def check_nodes(self, name: str, comp: Compressor, nodes: Nodes) -> None:
         nodes.node(name, "reservoir", comp.reservoir, chambers_only=True)
+        if comp.reservoir in nodes.bellow_names:
+            raise CircuitError([name, "reservoir"], f"'{comp.reservoir}' is a bellow; a compressor fills a reservoir "
+                                                    f"(a finite supply or a tank)")
 
     def parameters(self, name: str, comp: Compressor) -> tuple:
         return comp.free_air_delivery_m3_per_s, comp.p_cut_in_Pa, comp.p_cut_out_Pa, comp.running_at_start
