@@ -17,6 +17,7 @@ from cosim.scenario.model import (
     VerifySettings,
 )
 from cosim.scenario.schema import _type_name, range_of
+from pneumatics.air_supply import AirDemand, Compressor
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.faults import Fault
@@ -47,6 +48,9 @@ CIRCUIT_SECTIONS = (
                                                 "(the valve settings connect the valves: `valve_settings: [false]` runs "
                                                 "without them)"),
     ("circuit.differential_valve", DifferentialPressureValve, "also `type: differential_valve`; null = none"),
+    ("circuit.compressor", Compressor, "also `type: compressor`; fills the supply, which then needs a volume `V_m3`; "
+                                       "absent: none (docs/models.md, \"The air supply\")"),
+    ("circuit.air_demand", AirDemand, "also `type: air_demand`; draws from the supply (needs its `V_m3`); absent: none"),
     ("circuit.components: type: safety_valve", SafetyValve, "explicit circuits only"),
     ("circuit.components: type: orifice", Orifice, "explicit circuits only"),
 )

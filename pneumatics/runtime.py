@@ -431,6 +431,11 @@ class CircuitRuntime:
         return governor(running, p, air.p_cut_in_Pa, air.p_cut_out_Pa)
 
     @property
+    def has_air_supply(self) -> bool:
+        """The circuit has compressors or air demands (:mod:`pneumatics.air_supply`)."""
+        return self._air.present
+
+    @property
     def has_governors(self) -> bool:
         """The circuit has compressors, whose governors switch between the integrator's steps."""
         return bool(self._air.n_compressors)

@@ -73,7 +73,8 @@ class Output:
     ``dims``: its label dimensions besides time and case (``wheel``, ``wheelset``, ``bellow``,
     ``link``, ``valve``); ``column``: its CSV column pattern (``{}``: the label; None: not in the
     CSV); ``read(sample)``: its value at the current state, (..., cases) (:class:`Sample`);
-    ``contact``: sampled only when the cars run on the wheel-rail contact."""
+    ``contact``: sampled only when the cars run on the wheel-rail contact; ``air_supply``: only when
+    the circuit has a compressor or an air demand."""
 
     name: str
     dims: Tuple[str, ...]
@@ -82,6 +83,7 @@ class Output:
     column: Optional[str]
     read: Callable[["Sample"], np.ndarray]
     contact: bool = False
+    air_supply: bool = False
 
 
 @dataclass
@@ -183,6 +185,15 @@ OUTPUTS = (
            "the left)", "aoa_{}_rad", _per_car("angle_of_attack_rad", 4), contact=True),
     Output("flange_contact", ("wheel",), "1", "flange contact (1: contact angle above the flange threshold)",
            "flange_{}", _per_car("flange_contact", 8), contact=True),
+    # the air supply beyond the suspension (a compressor, air demands: pneumatics.air_supply)
+    Output("compressor_running", (), "1", "compressors running (each 1 while its governor runs it)", "compressor_running",
+           lambda s: s.sim.circuit.compressor_running(s.sim.x).sum(axis=0), air_supply=True),
+    Output("compressor_run_time_s", (), "s", "compressor running time (cumulative)", "compressor_run_time_s",
+           lambda s: s.sim.circuit.compressor_run_time_s(s.sim.x).sum(axis=0), air_supply=True),
+    Output("compressor_air_kg", (), "kg", "air the compressors delivered into the reservoir (cumulative)",
+           "compressor_air_kg", lambda s: s.sim.circuit.compressor_air_kg(s.sim.x).sum(axis=0), air_supply=True),
+    Output("air_demand_kg", (), "kg", "air the other consumers (brakes, doors) drew (cumulative)", "air_demand_kg",
+           lambda s: s.sim.circuit.demand_air_kg(s.sim.x).sum(axis=0), air_supply=True),
 )
 
 
@@ -389,7 +400,7 @@ class CoSimulation:
         any_stopped = bool(stopped.any())
         record.t_s.append(self.t)
         for output in self.outputs:
-            if output.contact and not self.contact:
+            if (output.contact and not self.contact) or (output.air_supply and not c.has_air_supply):
                 continue
             values = np.array(output.read(now), dtype=float)
             if any_stopped:

@@ -3,6 +3,7 @@ unloading of a run's Dataset, its per-case curves and bellow panels, the air acc
 columns and figure of a fault."""
 from __future__ import annotations
 
+import math
 from typing import Dict, List, Optional
 
 import numpy as np
@@ -53,10 +54,24 @@ def air_columns(case: xr.Dataset) -> Dict[str, float]:
     supply; a finite supply is a chamber, its air moves within), which closes to the
     integrator's round-off (the circuit holds every term as a state)."""
     m = case["total_mass_kg"].values
-    return {"air_injected_kg": float(case["air_from_supply_kg"].values[-1]),
-            "air_exhausted_kg": float(case["air_to_atmosphere_kg"].values[-1]) + 0.0,   # no "-0"
-            "air_lost_kg": float(case["air_lost_kg"].values[-1]) + 0.0,
-            "mass_balance_error_kg": float(m[-1] - m[0] - case["net_inflow_kg"].values[-1])}
+    columns = {"air_injected_kg": float(case["air_from_supply_kg"].values[-1]),
+               "air_exhausted_kg": float(case["air_to_atmosphere_kg"].values[-1]) + 0.0,   # no "-0"
+               "air_lost_kg": float(case["air_lost_kg"].values[-1]) + 0.0,
+               "mass_balance_error_kg": float(m[-1] - m[0] - case["net_inflow_kg"].values[-1])}
+    return {**columns, **air_supply_columns(case)}
+
+
+def air_supply_columns(case: xr.Dataset) -> Dict[str, float]:
+    """With a compressor or air demands (:mod:`pneumatics.air_supply`; none without): the air the
+    compressor delivered and the demands drew [kg], the compressor's duty cycle (its running time
+    over the run's) and its running minutes per hour of service."""
+    if "compressor_air_kg" not in case:
+        return {}
+    t = case["time"].values
+    duty = float(case["compressor_run_time_s"].values[-1] / (t[-1] - t[0])) if t[-1] > t[0] else math.nan
+    return {"compressor_air_kg": float(case["compressor_air_kg"].values[-1]),
+            "air_demand_kg": float(case["air_demand_kg"].values[-1]),
+            "compressor_duty": duty, "compressor_min_per_h": 60.0 * duty}
 
 
 def fault_figure(scenario: Scenario, ds: xr.Dataset, suffix: str = "", valves_text: str = "") -> List[Figure]:

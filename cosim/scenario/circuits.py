@@ -11,6 +11,7 @@ import numpy as np
 from cosim.errors import ScenarioError
 from cosim.scenario.model import CarCircuit
 from cosim.scenario.schema import build, check_keys, coerce, describe, known_name, require
+from pneumatics.air_supply import AirDemand, Compressor
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import COMPONENT_TYPES, Circuit, CircuitError
@@ -111,7 +112,8 @@ def explicit_components(data: Mapping, file) -> Dict[str, object]:
 LAYOUT_KEYS = {**{b: "bellow" for b in BELLOWS}, **{f"tank_{b}": "tank" for b in BELLOWS},
                 **{f"pipe_{b}": "pipe" for b in BELLOWS}, **{f"lv_{b}": "levelling_valve" for b in BELLOWS},
                 "lv_F": "levelling_valve", "lv_R": "levelling_valve", "dpv_F": "differential_valve",
-                "dpv_R": "differential_valve", "supply": "supply", "cross_F": "cross_pipe", "cross_R": "cross_pipe"}
+                "dpv_R": "differential_valve", "supply": "supply", "cross_F": "cross_pipe", "cross_R": "cross_pipe",
+                "compressor": "compressor", "air_demand": "air_demand"}
 
 
 def car_circuit(data: Mapping, file) -> CarCircuit:
@@ -122,7 +124,7 @@ def car_circuit(data: Mapping, file) -> CarCircuit:
         return CarCircuit("explicit", Bellow(), None, Pipe("", ""), has_valves, LevellingValve(""), None, Supply(), None,
                           tuple(explicit.items()))
     keys = ("preset", "layout", "bellow", "tank", "pipe", "valves", "levelling_valve", "differential_valve", "supply",
-            "cross_pipe")
+            "cross_pipe", "compressor", "air_demand")
     check_keys(data, keys, file, ["circuit"])
     data = with_preset(data, file, ("bellow", "tank", "pipe"))
     layout = coerce(data.get("layout", "four_point"), str, file, ["circuit", "layout"])
@@ -144,7 +146,13 @@ def car_circuit(data: Mapping, file) -> CarCircuit:
     cross = pipe_of(data["cross_pipe"], file, P + ["cross_pipe"]) if data.get("cross_pipe") is not None else None
     if layout == "two_point" and cross is None:
         raise ScenarioError(file, P + ["cross_pipe"], "a two_point layout needs a cross_pipe between the bellows of a bogie")
-    spec = CarCircuit(layout, bellow, tank, pipe, valves, lv, dpv, supply, cross)
+    compressor = optional(Compressor, {"compressor": None, **data}, "compressor", file, P, reservoir="supply")
+    demand = optional(AirDemand, {"air_demand": None, **data}, "air_demand", file, P, node="supply")
+    if (compressor or demand) and supply.is_fixed:
+        key = "compressor" if compressor else "air_demand"
+        raise ScenarioError(file, P + [key], "needs a main reservoir that holds air: give circuit.supply a volume "
+                                             "V_m3 (the default supply is a source at fixed pressure)")
+    spec = CarCircuit(layout, bellow, tank, pipe, valves, lv, dpv, supply, cross, compressor=compressor, air_demand=demand)
     # both valve settings: the runs may switch the valves (twist/curve valve_settings)
     for setting in (valves, not valves):
         compile_check(dataclasses.replace(spec, valves=setting).components(), file, P, LAYOUT_KEYS)

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, Dict, Optional, Tuple
 
 from cosim.scenario.checks import Check
+from pneumatics.air_supply import AirDemand, Compressor
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import Circuit
@@ -128,15 +129,23 @@ class CarCircuit:
     explicit: Optional[Tuple[Tuple[str, object], ...]] = None
     #: what fails, when (``faults:``; :mod:`pneumatics.faults`)
     faults: Tuple[Fault, ...] = ()
+    #: the compressor filling the (finite) supply and the other consumers drawing from it
+    #: (``circuit.compressor``, ``circuit.air_demand``; :mod:`pneumatics.air_supply`)
+    compressor: Optional[Compressor] = None
+    air_demand: Optional[AirDemand] = None
 
     def components(self) -> Dict[str, object]:
         if self.explicit is not None:
             return dict(self.explicit)
-        return car_circuit(self.bellow, self.tank, self.pipe,
-                           levelling=self.levelling_valve if self.valves else None,
-                           differential=self.differential_valve if self.valves else None,
-                           supply=self.supply, points=4 if self.layout == "four_point" else 2,
-                           cross_pipe=self.cross_pipe)
+        components = car_circuit(self.bellow, self.tank, self.pipe,
+                                 levelling=self.levelling_valve if self.valves else None,
+                                 differential=self.differential_valve if self.valves else None,
+                                 supply=self.supply, points=4 if self.layout == "four_point" else 2,
+                                 cross_pipe=self.cross_pipe)
+        extra = {name: c for name, c in (("compressor", self.compressor), ("air_demand", self.air_demand)) if c is not None}
+        if extra and "supply" not in components:     # valves off: the reservoir is still there, filled and drawn
+            components["supply"] = self.supply
+        return {**components, **extra}
 
     def compile(self, k_W_per_K=0.0) -> Circuit:
         """The circuit with its faults (none happened yet), for the k values ``k_W_per_K``."""

@@ -8,6 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from pneumatics.air_supply import AirDemand, Compressor
 from pneumatics.assembly import assemble
 from pneumatics.assembly.link_types import LINK_TYPES
 from pneumatics.boundary import Supply
@@ -25,7 +26,8 @@ def every_link_type() -> dict:
     return {"lv": LevellingValve("A", lag_s=0.5, delay_s=0.2, delay_stages=2, hysteresis_m=0.001),
             "A": Bellow(p0_Pa=4e5), "B": Bellow(p0_Pa=4e5), "tank": Tank(p0_Pa=4e5), "supply": Supply(),
             "dpv": DifferentialPressureValve("A", "B"), "throttle": Orifice("B", "tank", 1e-9),
-            "steady": Pipe("A", "tank", model="quasi_steady"), "pipe": Pipe("B", "tank"), "safety": SafetyValve("B")}
+            "steady": Pipe("A", "tank", model="quasi_steady"), "pipe": Pipe("B", "tank"), "safety": SafetyValve("B"),
+            "brakes": AirDemand(node="tank"), "compressor": Compressor(reservoir="tank")}
 
 
 FAULTS = (Fault("burst", "A", 1.0, area_m2=1e-4), Fault("ruptured", "pipe", 2.0))
@@ -35,7 +37,8 @@ def test_the_links_follow_the_table_of_link_types():
     assembly = assemble(every_link_type(), faults=FAULTS)
     expected = {"pipe": ["pipe"], "quasi_steady_pipe": ["steady"], "orifice": ["throttle"],
                 "fault_opening": ["A.burst", "pipe.ruptured@B", "pipe.ruptured@tank"], "differential": ["dpv"],
-                "valve_supply": ["lv.supply", "safety.supply"], "valve_exhaust": ["lv.exhaust", "safety.exhaust"]}
+                "valve_supply": ["lv.supply", "safety.supply"], "valve_exhaust": ["lv.exhaust", "safety.exhaust"],
+                "compressor": ["compressor"], "air_demand": ["brakes"]}
     assert [t.key for t in LINK_TYPES] == list(expected)
     links = assembly.links
     assert [list(links.names[links.rows[key]]) for key in expected] == list(expected.values())
