@@ -7,6 +7,7 @@ import yaml
 
 from cosim.errors import ScenarioError
 from cosim.load import load_scenario
+
 from helpers import SCENARIOS
 
 STOP = yaml.safe_load((SCENARIOS / "station_stop.yaml").read_text())
