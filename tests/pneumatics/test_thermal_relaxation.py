@@ -98,7 +98,7 @@ def test_loaded_bellow_height_drifts_with_m_cp_over_k(k):
     bellow = Bellow()                                         # 12 dm^3, A = 0.13 m^2 constant
     circuit, x1 = fill_then_shut(bellow, k)
     lay, gas, T_atm = circuit.layout, AIR, circuit.atmosphere.T_K
-    M, T1 = float(x1[lay.m][0]), float(x1[lay.T][0])
+    M = float(x1[lay.m][0])
     p_load, _ = circuit.chamber_states(x1, np.zeros(1))       # the load it carries from the end of the fill on
     f, crushing = loaded_bellow_rates(circuit, bellow, float(np.ravel(p_load)[0]))
     tau = M * gas.cp_J_per_kgK / k
