@@ -16,6 +16,7 @@ from cosim.scenario.model import (
     StateLimits,
     VerifySettings,
 )
+from cosim.scenario.payload import PayloadSettings
 from cosim.scenario.schema import _type_name, range_of
 from pneumatics.air_supply import AirDemand, Compressor
 from pneumatics.boundary import Supply
@@ -38,6 +39,11 @@ CAR_SECTIONS = (
     ("vehicle", VehicleParams, "the car kinds: a parameter file, or {file: ..., FIELD: value}"),
     ("faults[i]", Fault, "the car kinds: a list of faults, each {kind, component, t_s, ...}; kinds and what each "
                          "needs: docs/faults.md"),
+    ("payload", PayloadSettings, "the car kinds but `stability`: passengers boarding and alighting; besides these "
+                                 "keys `initial: {passengers | mass_kg | normal_fraction}` (uniform, on board at "
+                                 "arrival) and `events: [{t_s, duration_s, passengers | mass_kg | normal_fraction, "
+                                 "position}]`, position `uniform`, `front`, `rear`, `left`, `right`, `front_left` ... "
+                                 "or `{x_m, y_m}`; sources and what is assumed: docs/payload.md"),
 )
 CIRCUIT_SECTIONS = (
     ("circuit.bellow", Bellow, "also `type: bellow` in circuit.components"),
@@ -86,7 +92,7 @@ of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is
 The rig kinds ({rig}) take `circuit: {{bellow, tank, pipe, p0_Pa}}` (`p0_Pa`: {p0}) and `test`; the car kinds
 ({car}) take `vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the
 sections below, or an explicit `components:` mapping of named components with a `type`),
-`solver`, `verify`, `state_limits` and their experiment ({sections}).
+`solver`, `verify`, `state_limits`, `faults`, `payload` and their experiment ({sections}).
 """
 
 

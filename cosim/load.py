@@ -29,6 +29,7 @@ from cosim.scenario.model import (
     StateLimits,
     VerifySettings,
 )
+from cosim.scenario.payload import parse_payload
 from cosim.scenario.presets import VEHICLE_PRESETS
 from cosim.scenario.schema import (
     MAX_SAMPLES,
@@ -130,7 +131,7 @@ def load_scenario(path, overrides: Sequence[str] = (), k_override: Optional[Sequ
         raise ScenarioError(path, ["kind"], f"unknown kind {name!r} (expected one of {', '.join(KINDS)})")
     kind = KINDS[name]
     if kind.car:
-        check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "track", "circuit", "faults",
+        check_keys(data, ("kind", "name", "description", "k_W_per_K", "vehicle", "track", "circuit", "faults", "payload",
                           kind.section, "solver", "verify", "state_limits", "checks", "allow"), path, [])
     else:
         check_keys(data, ("kind", "name", "description", "k_W_per_K", "circuit", kind.section, "allow"), path, [])
@@ -174,6 +175,12 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
     shortest = kind.shortest_duration_s(experiment)   # every case sees every fault
     circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit, shortest,
                                                                valve_settings))
+    refused = kind.refuse_payload(experiment) if data.get("payload") else None
+    if refused:
+        raise ScenarioError(path, ["payload"], refused)
+    payload = parse_payload(data.get("payload"), path, shortest)
+    if payload is not None:       # the car starts carrying its payload at arrival: the bellows' pressures follow
+        car = _check_car_builds(vehicle, data.get("vehicle"), path, payload)
     air = check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
     state_limits = _state_limits(data.get("state_limits"), path, air)
@@ -181,7 +188,7 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
     extra = kind.extra_files(experiment)
     return Scenario(**common, files_sha256=_files_read(path, data, extra), experiment=experiment, circuit=circuit,
                     vehicle=vehicle, track=track, solver=solver, verify=verify, state_limits=state_limits,
-                    checks=checks)
+                    checks=checks, payload=payload)
 
 
 def _allow(value, path) -> Tuple[str, ...]:
@@ -363,12 +370,15 @@ def _track_structure(value, file) -> TrackStructure:
     return build(TrackStructure, {**defaults, **fields}, file, ["track"], model="flexible")
 
 
-def _check_car_builds(vehicle: VehicleParams, source, file):
+def _check_car_builds(vehicle: VehicleParams, source, file, payload=None):
     """Build the car once (~0.1 s): constraints between parameters (e.g. the bellow's upper plate
     above its lower one) fail here, as bad input, not later inside a worker process. Returns the
-    car (its static bellow forces start the circuit, :func:`check_initial_state`)."""
+    car (its static bellow forces start the circuit, :func:`check_initial_state`); ``payload``: its
+    :class:`~cosim.scenario.payload.PayloadSchedule` (the car carries its payload at arrival)."""
     from vehicle.car import MetroCar  # exudyn: only for car scenarios
     try:
+        if payload is not None:
+            return MetroCar(vehicle, payload=payload.blocks_at)
         return MetroCar(vehicle)
     except Exception as exc:                    # noqa: BLE001 -- whatever the parameters break is bad input
         where = Path(file).parent / source if isinstance(source, str) else file

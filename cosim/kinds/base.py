@@ -176,6 +176,11 @@ class CarKind(Kind):
         """Why the experiment cannot honour ``faults:`` (None: it runs them)."""
         return None
 
+    def refuse_payload(self, experiment: Any) -> Optional[str]:
+        """Why the experiment cannot honour ``payload:`` (None: it runs it; its ``make_car`` passes
+        ``scenario.car_payload`` to the car)."""
+        return None
+
     @abstractmethod
     def make_car(self, scenario: "Scenario"):
         """The car of a run, with the :class:`vehicle.car.MetroCar` interface (a bound method of

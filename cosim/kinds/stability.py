@@ -174,6 +174,14 @@ def extra_files(test: StabilityTest) -> Tuple[Path, ...]:
     return (Path(test.wheel_profile),) if test.wheel_profile else ()
 
 
+def refuse_payload(test: StabilityTest) -> Optional[str]:
+    """A stability analysis linearises the car about steady running: passengers boarding over
+    time have no place in it. Refused rather than ignored."""
+    return ("a stability analysis linearises the car about steady running and does not honour payload events; "
+            "give the loaded car's carbody as vehicle.carbody_mass_kg (and its inertias), or run the loaded car on "
+            "track (kind curve_entry or ride)")
+
+
 def refuse_faults(test: StabilityTest) -> Optional[str]:
     """A stability analysis linearises the intact car and circuit about steady running: a fault
     (an event in time) has no place in it, and a brute force or ramp-down with one would be judged
@@ -695,6 +703,7 @@ class StabilityKind(CarKind):
     valve_settings = staticmethod(valve_settings)
     extra_files = staticmethod(extra_files)
     refuse_faults = staticmethod(refuse_faults)
+    refuse_payload = staticmethod(refuse_payload)
     refuse_check = staticmethod(refuse_check)
     refuse_limit = staticmethod(refuse_limit)
     make_car = staticmethod(make_car)

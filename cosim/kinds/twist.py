@@ -176,7 +176,8 @@ def make_car(scenario: Scenario):
     """The car standing on rails that follow the twist (picklable factory for cosim.engine.cases)."""
     from vehicle.car import MetroCar  # exudyn: imported when a car is built, not to read a scenario
     return MetroCar(scenario.vehicle, rail_height_m=rail_heights(scenario.experiment), step_s=scenario.solver.mechanics_step_s,
-                    spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track)
+                    spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
+                    payload=scenario.car_payload)
 
 
 def run_settings(scenario: Scenario) -> Sequence[Optional[bool]]:

@@ -43,7 +43,7 @@ def make_car(scenario: Scenario):
                     spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
                     speed_m_per_s=curve.speed_m_per_s, guidance=curve.guidance,
                     contact=curve.contact_params() if curve.contact else None,
-                    irregularity=curve.track_irregularity(scenario.vehicle))
+                    irregularity=curve.track_irregularity(scenario.vehicle), payload=scenario.car_payload)
 
 
 #: components whose link flows are written to the time series

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, Dict, Optional, Tuple
 
 from cosim.scenario.checks import Check
+from cosim.scenario.payload import PayloadSchedule
 from pneumatics.air_supply import AirDemand, Compressor
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
@@ -188,9 +189,17 @@ class Scenario:
     #: states that stop a case (car kinds: ``state_limits``)
     state_limits: StateLimits = StateLimits()
     checks: Tuple[Check, ...] = ()
+    #: passengers boarding and alighting (car kinds: ``payload:``; None: the tare car throughout)
+    payload: Optional[PayloadSchedule] = None
     #: validity flags (:data:`cosim.limits.validity.FLAGS`) that ``check`` accepts instead of failing on
     allow: Tuple[str, ...] = ()
     raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def car_payload(self):
+        """What the car's floor carries over time, ``MetroCar(payload=...)``: t -> payload blocks
+        (None: no ``payload:``, the tare car, built as before)."""
+        return self.payload.blocks_at if self.payload is not None else None
 
     def with_valves(self, valves: bool) -> "Scenario":
         """The same car scenario with its levelling (and differential) valves connected (True) or

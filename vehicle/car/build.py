@@ -13,6 +13,7 @@ from exudyn.advancedUtilities import CreateSymbolicUserFunction
 from exudyn.rigidBodyUtilities import RigidBodyInertia
 
 from ..params import WHEELS, VehicleParams
+from ..payload import CarbodyMass
 from .contact import ContactGuidance
 from .options import ModelOptions
 from .path import CarPath
@@ -71,10 +72,13 @@ class CarModel:
 
 
 def build_model(mbs, p: VehicleParams, static: StaticReference, path: CarPath, options: ModelOptions,
-                contact: ContactGuidance | None, step_s: float, rail0_m: np.ndarray) -> CarModel:
+                contact: ContactGuidance | None, step_s: float, rail0_m: np.ndarray,
+                carbody: CarbodyMass | None = None) -> CarModel:
     """Build the car into the empty system ``mbs`` and assemble it. ``rail0_m``: (8,) rail heights
-    at t = 0 (kinematic guidance); ``step_s``: the internal step (the Maxwell laws' first)."""
-    return _Builder(mbs, p, static, path, options, contact).build(step_s, rail0_m)
+    at t = 0 (kinematic guidance); ``step_s``: the internal step (the Maxwell laws' first);
+    ``carbody``: the carbody's mass properties with its payload at t = 0 (None: the tare body of
+    ``p``; its reference point stays the tare centre of gravity either way)."""
+    return _Builder(mbs, p, static, path, options, contact).build(step_s, rail0_m, carbody)
 
 
 class _Builder:
@@ -89,7 +93,7 @@ class _Builder:
         self.ground = self.carbody = None
         self.bogies, self.wheelsets = [], []
 
-    def build(self, step_s: float, rail0_m: np.ndarray) -> CarModel:
+    def build(self, step_s: float, rail0_m: np.ndarray, carbody: CarbodyMass | None = None) -> CarModel:
         p, mbs, static = self.params, self.mbs, self.static
         gravity = [0.0, 0.0, -p.gravity_m_per_s2]
 
@@ -105,6 +109,10 @@ class _Builder:
         self.carbody = body(p.carbody_mass_kg, p.carbody_inertia_xx_kg_m2,
                             p.carbody_inertia_yy_kg_m2, p.carbody_inertia_zz_kg_m2,
                             [0.0, 0.0, p.carbody_cog_height_m])
+        if carbody is not None:          # loaded at t = 0: the same node, the loaded body's mass
+            mbs.SetObjectParameter(self.carbody, "mass", carbody.mass_kg)
+            mbs.SetObjectParameter(self.carbody, "centerOfMass", list(carbody.com_m))
+            mbs.SetObjectParameter(self.carbody, "inertia", list(carbody.inertia6_kg_m2))
         self.bogies = [body(p.bogie_mass_kg, p.bogie_inertia_xx_kg_m2, p.bogie_inertia_yy_kg_m2,
                             p.bogie_inertia_zz_kg_m2, [x, 0.0, p.bogie_cog_height_m])
                        for x in static.bogie_x_m]

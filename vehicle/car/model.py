@@ -20,6 +20,7 @@ from .maxwell import MaxwellDampers
 from .options import CONTACT_NEWTON_REL_TOL, SPECTRAL_RADIUS, CarOptions
 from .outputs import CarOutputs
 from .path import CarPath
+from .payload import CarbodyPayload
 from .secondary import check_components
 from .solver import CarSolver
 from .statics import StaticReference
@@ -116,6 +117,10 @@ class MetroCar:
             their rates). With kinematic guidance the heights add to ``rail_height_m`` and a
             running car's guidance follows the lateral alignment; gauge has no effect there.
             Should be 0 under the car at t = 0 (static start). None = design track.
+        payload: ``payload(t_s) -> blocks`` (:class:`~vehicle.payload.PayloadBlock`): what the
+            floor carries at t; before every internal step the carbody's mass, centre of gravity
+            and inertia follow it (:mod:`.payload`). At t = 0 it must be centred: the car starts
+            at its static equilibrium carrying it. None = the tare carbody.
         wheelset_lateral_offset_m: contact guidance only: (4,) initial lateral displacements
             [m] of the wheelsets (+ left), e.g. to release them on straight track; each starts
             at the rigid-contact height and roll of the table at that displacement (with the
@@ -140,7 +145,9 @@ class MetroCar:
         self.options = options = CarOptions.given(options, keywords)
         model, run = options.model, options.run
         flexible = model.track_structure.flexible
-        static = StaticReference.of(params)
+        #: the payload on the floor (:class:`~.payload.CarbodyPayload`; None: the tare carbody throughout)
+        self.payload = CarbodyPayload(params, run.payload) if run.payload is not None else None
+        static = StaticReference.of(params, self.payload.initial_payload_kg if self.payload else 0.0)
         check_components(params)
         #: where the car is along its track over time (:class:`~.path.CarPath`)
         self.path = CarPath.plan(run, static.wheelset_x_m, model.contact_guidance)
@@ -160,7 +167,7 @@ class MetroCar:
         self.mbs = self.SC.AddSystem()
         #: the exudyn model as built and assembled (:class:`~.build.CarModel`)
         self.model = build_model(self.mbs, params, static, self.path, model, self.contact,
-                                 options.solver.step_s, rail0)
+                                 options.solver.step_s, rail0, self.payload.initial if self.payload else None)
         #: the airspring force laws and the bellows' crushing (:class:`~.bellows.BellowLaws`)
         self.bellows = BellowLaws(self.mbs, self.model, static, params)
         #: the Maxwell dampers' states (:class:`~.maxwell.MaxwellDampers`)
@@ -286,8 +293,19 @@ class MetroCar:
         if self.maxwell.active:
             self.maxwell.set_step_size(mbs, t)
         ok = hooks.pre_step(mbs, t)
+        if self.payload is not None:
+            self.payload.pre_step(mbs, self.model.carbody, t)
         solver.heading_rad = hooks.heading_rad
         return ok
+
+    def floor_heights_m(self, points_xy_m) -> np.ndarray:
+        """(n,) height [m] of the floor at ``points_xy_m`` ((n, 2): x along the car from its
+        centre, y across, + left), see :meth:`.outputs.CarOutputs.floor_heights_m`."""
+        return self.outputs.floor_heights_m(points_xy_m)
+
+    def payload_kg(self) -> float:
+        """The payload the carbody carries now [kg] (0 without one)."""
+        return self.payload.payload_kg if self.payload is not None else 0.0
 
     def set_carbody_load(self, force_N=(0.0, 0.0, 0.0), torque_N_m=(0.0, 0.0, 0.0)) -> None:
         """External load on the carbody for the following :meth:`advance` (needs

@@ -12,6 +12,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..params import SPECTRAL_RADIUS, ContactParams, TrackStructure
+from ..payload import PayloadBlock
 from ..track import TrackGeometry
 
 #: Newton's relative tolerance with contact guidance. A step's initial residual is ~M a
@@ -53,8 +54,8 @@ class ModelOptions:
 
 @dataclass(frozen=True)
 class RunSettings:
-    """How the car runs: along which track, how fast, from where, and what the rails under it
-    do (prescribed heights, irregularities)."""
+    """How the car runs: along which track, how fast, from where, what the rails under it
+    do (prescribed heights, irregularities) and what its floor carries (``payload``)."""
 
     track: TrackGeometry | None = None
     speed_m_per_s: float = 0.0
@@ -62,8 +63,11 @@ class RunSettings:
     deceleration: tuple[float, float] | None = None
     rail_height_m: Callable[[float], np.ndarray] | None = None
     irregularity: Callable[[np.ndarray], tuple] | None = None
+    payload: Callable[[float], Sequence[PayloadBlock]] | None = None
 
     def __post_init__(self):
+        if self.payload is not None and not callable(self.payload):
+            raise ValueError("payload must be callable: payload(t_s) -> payload blocks (vehicle.payload.PayloadBlock)")
         if self.irregularity is not None and not callable(self.irregularity):
             raise ValueError("irregularity must be callable: irregularity(s_m) -> (lateral_m, "
                              "vertical_m, cross_level_m, gauge_m)")

@@ -153,6 +153,16 @@ class CarOutputs:
             out[:, j] = A.T @ (a - g)
         return out
 
+    def floor_heights_m(self, points_xy_m) -> np.ndarray:
+        """(n,) height [m] above the rail-top plane z = 0 of the floor points ``points_xy_m``
+        ((n, 2): x along the car from its centre, + forward, y across, + left), points of the
+        carbody at ``floor_height_m`` (moving with its heave, pitch and roll; read at the node,
+        the tare centre of gravity, whatever the payload)."""
+        body = self._mbs.GetObjectOutputBody
+        dz = self._params.floor_height_m - self._params.carbody_cog_height_m
+        return np.array([body(self._model.carbody, _OUT.Position, localPosition=[float(x), float(y), dz])[2]
+                         for x, y in np.asarray(points_xy_m, dtype=float).reshape(-1, 2)])
+
     def carbody_roll_rad(self) -> float:
         """Carbody roll angle [rad], right-hand about its own x axis (forward): positive = left
         side up, i.e. the outward roll of a left-hand curve (negative in a right-hand one).

@@ -34,16 +34,18 @@ class StaticReference:
     airspring_in_series: bool
 
     @classmethod
-    def of(cls, p: VehicleParams) -> StaticReference:
-        """The reference state of the car ``p`` on its vertical Hertz contacts."""
+    def of(cls, p: VehicleParams, payload_kg: float = 0.0) -> StaticReference:
+        """The reference state of the car ``p`` on its vertical Hertz contacts, its carbody
+        carrying ``payload_kg`` centred on the floor (:mod:`.payload`)."""
         g = p.gravity_m_per_s2
-        P_axlebox_N = (p.carbody_mass_kg * g / 2.0 + p.bogie_mass_kg * g) / 4.0
+        carbody_kg = p.carbody_mass_kg + payload_kg
+        P_axlebox_N = (carbody_kg * g / 2.0 + p.bogie_mass_kg * g) / 4.0
         Q_static_N = P_axlebox_N + p.wheelset_mass_kg * g / 2.0
         delta_static_m = (Q_static_N / p.hertz_constant_N_per_m1_5) ** (2.0 / 3.0)
         bellow_height_m = p.airspring_upper_height_m - p.airspring_lower_height_m
         if bellow_height_m <= 0.0:
             raise ValueError("airspring_upper_height_m must exceed airspring_lower_height_m")
-        return cls(bellow_force_N=p.carbody_mass_kg * g / 4.0, axlebox_load_N=P_axlebox_N,
+        return cls(bellow_force_N=carbody_kg * g / 4.0, axlebox_load_N=P_axlebox_N,
                    wheel_load_N=Q_static_N, bogie_x_m=np.array(p.bogie_x_m),
                    wheelset_x_m=np.array(p.wheelset_x_m),
                    wheelset_z_m=p.wheel_radius_m - delta_static_m, bellow_height_m=bellow_height_m,

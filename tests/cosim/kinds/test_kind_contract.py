@@ -32,6 +32,9 @@ TINY = {
                     "k_W_per_K=0,.inf"),
     "ride": ("ride_comfort.yaml", ["ride.speeds_m_per_s=[10]", "ride.record_s=5", "ride.settle_s=0.5", "solver.jobs=1"],
              "k_W_per_K=0,.inf"),
+    "station_stop": ("station_stop.yaml", ["station.duration_s=1", "payload.events[0].t_s=0.2",
+                                           "payload.events[0].duration_s=0.5", "payload.events[0].normal_fraction=0.05",
+                                           "solver.jobs=1"], "k_W_per_K=0,.inf"),
     "stability": ("stability.yaml", ["stability.speeds_m_per_s=[30,50]", "stability.resolution_m_per_s=5",
                                      "stability.reference_speed_m_per_s=30", "solver.jobs=1"], "k_W_per_K=0,.inf"),
 }

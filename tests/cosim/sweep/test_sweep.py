@@ -499,6 +499,8 @@ SHORT = {
     "straight_irregular.yaml": [*CURVE, "--set", "curve.duration_s=3"],
     "ride_comfort.yaml": ["--set", "ride.speeds_m_per_s=[20.0]", "--set", "ride.record_s=5", "--set", "ride.settle_s=1"],
     "stability.yaml": STABILITY,
+    "station_stop.yaml": ["--set", "station.duration_s=2", "--set", "payload.events[0].t_s=0.5",
+                          "--set", "payload.events[0].duration_s=1", "--set", "payload.events[0].normal_fraction=0.05"],
     "stability_ramp.yaml": [*STABILITY, "--set", "stability.nonlinear_speeds_m_per_s=[30]",
                             "--set", "stability.nonlinear_s=1", "--set", "stability.ramp_from_m_per_s=35",
                             "--set", "stability.ramp_decelerations_m_per_s2=[2]", "--set", "stability.ramp_hold_s=1"],
