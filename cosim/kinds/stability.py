@@ -42,6 +42,11 @@ from vehicle.params import ContactParams, VehicleParams
 
 #: the carbody's modes reported per case, as the mode labels name them
 BODY_MODES = ("carbody bounce", "carbody pitch", "carbody yaw", "carbody lower sway", "carbody upper sway")
+#: the carbody of a stability analysis: free on its suspension, or held (the Cooperrider
+#: configuration: running at constant speed without lateral, roll or yaw motion)
+HELD = ("free", "held")
+#: the bogies that run free: both, or the front one alone (the rear one held; with the carbody held)
+BOGIES = ("both", "front")
 #: airspring models of a case: the air in the eigenvalue problem, or each airspring its static stiffness
 AIRSPRINGS = ("circuit", "static")
 #: the brute force's growth rate is fitted to the peaks up to this many times the disturbance: small
@@ -82,8 +87,17 @@ class StabilityTest:
     reference_speed_m_per_s: Optional[float] = None
     max_frequency_Hz: float = 20.0
     conicity: Optional[float] = None
+    equivalent_conicity: Optional[float] = None
     wheel_profile: Optional[str] = None
     contact_smoothing_mm: Optional[float] = None
+    carbody: str = "free"
+    bogies: str = "both"
+    frame_roll: str = "free"
+    roll_rate_creepage: bool = True
+    f11_N: Optional[float] = None
+    f22_N: Optional[float] = None
+    f23_N_m: Optional[float] = None
+    f33_N_m2: Optional[float] = None
     valve_settings: Tuple[bool, ...] = (False,)
     nonlinear_speeds_m_per_s: Tuple[float, ...] = ()
     disturbances_m: Tuple[float, ...] = (0.0005,)
@@ -95,11 +109,16 @@ class StabilityTest:
     ramp_disturbance_m: float = 0.003
 
     FIELD_RANGES = {
-        "speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most; > 0 (creepages are relative to V)"),
+        "speeds_m_per_s": Range(0.0, 150.0, False, True, "m/s", "540 km/h at most (a bogie on a low conicity hunts above service speeds, scenarios/cooperrider.yaml); > 0 (creepages are relative to V)"),
         "resolution_m_per_s": Range(1e-3, 10.0, unit="m/s", why="the bisection's final bracket"),
-        "reference_speed_m_per_s": Range(0.0, 100.0, False, True, "m/s"),
+        "reference_speed_m_per_s": Range(0.0, 150.0, False, True, "m/s"),
         "max_frequency_Hz": positive("Hz"),
         "conicity": Range(0.0, 0.8, False, True, "", "equivalent conicities of wheels in service: 0.01-0.6"),
+        "equivalent_conicity": Range(0.0, 0.8, False, True, "", "equivalent conicities of wheels in service: 0.01-0.6"),
+        "f11_N": Range(0.0, 1e9, False, True, "N", "Kalker's f11 of a wheel: ~1e7 N under ~60 kN"),
+        "f22_N": Range(0.0, 1e9, False, True, "N", "Kalker's f22 of a wheel: ~1e7 N under ~60 kN"),
+        "f23_N_m": Range(0.0, 1e7, unit="N m", why="Kalker's f23 of a wheel: ~1e4-1e5 N m; 0: no spin creep force"),
+        "f33_N_m2": Range(0.0, 1e6, unit="N m^2", why="Kalker's f33 of a wheel: ~10-1e3 N m^2; 0: no spin moment"),
         "contact_smoothing_mm": Range(0.0, 1.0, unit="mm", why="0: the rigid table; 1 mm blurs the flange itself"),
         "nonlinear_speeds_m_per_s": Range(0.0, 100.0, False, True, "m/s", "360 km/h at most"),
         "disturbances_m": Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)"),
@@ -120,6 +139,24 @@ class StabilityTest:
         return self.ramp_hold_s + (self.ramp_from_m_per_s - self.ramp_to_m_per_s) / deceleration_m_per_s2
 
     @property
+    def cone(self) -> Optional[float]:
+        """The cone's equivalent conicity (``equivalent_conicity``, or ``conicity``, its older
+        name), None: no cone."""
+        return self.equivalent_conicity if self.equivalent_conicity is not None else self.conicity
+
+    @property
+    def creep_coefficients(self) -> Tuple[float, ...]:
+        """(f11, f22, f23, f33) given, () = from the contact law."""
+        given = (self.f11_N, self.f22_N, self.f23_N_m, self.f33_N_m2)
+        return () if self.f11_N is None else tuple(float(f) for f in given)
+
+    @property
+    def held(self) -> Tuple[str, ...]:
+        """What the car holds (:data:`vehicle.car.options.HOLDS`)."""
+        return ((("carbody",) if self.carbody == "held" else ()) + (("rear bogie",) if self.bogies == "front" else ())
+                + (("bogie roll",) if self.frame_roll == "held" else ()))
+
+    @property
     def reference_speed(self) -> float:
         return self.reference_speed_m_per_s if self.reference_speed_m_per_s is not None else self.speeds_m_per_s[0]
 
@@ -127,9 +164,24 @@ class StabilityTest:
 def parse(data, vehicle: VehicleParams, path: Path) -> StabilityTest:
     test = build(StabilityTest, data, path, ["stability"])
     check_valve_settings(test.valve_settings, path, ["stability", "valve_settings"])
-    if test.conicity is not None and test.wheel_profile is not None:
-        raise ScenarioError(path, ["stability", "wheel_profile"], "give either conicity (a cone) or wheel_profile "
-                                                                   "(a profile file), not both")
+    if test.conicity is not None and test.equivalent_conicity is not None:
+        raise ScenarioError(path, ["stability", "conicity"], "conicity is the older name of equivalent_conicity: "
+                                                              "give one of them")
+    if test.cone is not None and test.wheel_profile is not None:
+        raise ScenarioError(path, ["stability", "wheel_profile"], "give either equivalent_conicity (a cone) or "
+                                                                   "wheel_profile (a profile file), not both")
+    for key, allowed in (("carbody", HELD), ("bogies", BOGIES), ("frame_roll", HELD)):
+        if getattr(test, key) not in allowed:
+            raise ScenarioError(path, ["stability", key], f"expected one of {', '.join(allowed)}, got "
+                                                          f"{getattr(test, key)!r}")
+    if test.bogies == "front" and test.carbody != "held":
+        raise ScenarioError(path, ["stability", "bogies"], "one bogie alone needs the carbody held (carbody: held): "
+                                                            "a free carbody couples the two bogies")
+    creep = (test.f11_N, test.f22_N, test.f23_N_m, test.f33_N_m2)
+    if any(f is not None for f in creep) and any(f is None for f in creep):
+        raise ScenarioError(path, ["stability", "f11_N"], "give all four creep coefficients (f11_N, f22_N, f23_N_m, "
+                                                           "f33_N_m2; 0 switches a term off) or none (from the "
+                                                           "contact law)")
     if test.ramp_from_m_per_s is not None and not test.ramp_to_m_per_s < test.ramp_from_m_per_s:
         raise ScenarioError(path, ["stability", "ramp_to_m_per_s"], f"the ramp slows down: expected below "
                                                                      f"ramp_from_m_per_s ({test.ramp_from_m_per_s:g} "
@@ -200,18 +252,21 @@ def contact_table_csv(test: StabilityTest, vehicle: VehicleParams) -> str:
     """The contact table the test asks for, as a CSV file (kept in the temporary folder under its
     content's hash); "" for the default S1002 / UIC60 table. Derived once per process and input
     (every car of a run asks for it; a wheel profile's table takes ~1.5 s to derive)."""
-    if test.conicity is None and test.wheel_profile is None:
+    if test.cone is None and test.wheel_profile is None:
         return ""
     profile = test.wheel_profile
     stamp = os.stat(profile).st_mtime_ns if profile is not None else None   # a profile edited since: anew
-    return _table_file(test.conicity, profile, stamp, float(vehicle.wheel_radius_m))
+    return _table_file(test.cone, profile, stamp, float(vehicle.wheel_radius_m), 0.5 * float(vehicle.contact_spacing_m))
 
 
 @functools.lru_cache(maxsize=16)
-def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp, r0: float) -> str:
+def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp, r0: float, e: float) -> str:
+    """A cone's table: knife-edge rails at +-e, the car's contact spacing / 2 (0.75 m for the metro
+    car, the cone's default)."""
     from vehicle.wheelrail.derive_table import derive_default  # exudyn-free, but heavy
     from vehicle.wheelrail.geometry import ContactTable
-    table = ContactTable.cone(conicity, r0_m=r0) if conicity is not None else derive_default(r0, wheel_file=wheel_profile)
+    table = (ContactTable.cone(conicity, r0_m=r0, half_spacing_m=e) if conicity is not None
+             else derive_default(r0, wheel_file=wheel_profile))
     text = table.to_csv()
     file = Path(tempfile.gettempdir()) / "pneumorail_tables" / f"{hashlib.sha256(text.encode()).hexdigest()[:16]}.csv"
     if not file.exists():                                  # whole or not at all (a killed write leaves no table)
@@ -222,7 +277,8 @@ def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp,
 
 def contact_params(test: StabilityTest, vehicle: VehicleParams) -> ContactParams:
     given = {} if test.contact_smoothing_mm is None else {"table_smoothing_mm": test.contact_smoothing_mm}
-    return ContactParams(table_csv=contact_table_csv(test, vehicle), **given)
+    return ContactParams(table_csv=contact_table_csv(test, vehicle), creep_coefficients=test.creep_coefficients,
+                         roll_rate_creepage=test.roll_rate_creepage, **given)
 
 
 def make_car(scenario: Scenario, speed_m_per_s: Optional[float] = None, contact: Optional[ContactParams] = None):
@@ -233,7 +289,7 @@ def make_car(scenario: Scenario, speed_m_per_s: Optional[float] = None, contact:
     v = test.speeds_m_per_s[0] if speed_m_per_s is None else speed_m_per_s
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, speed_m_per_s=float(v),
                     guidance="contact", contact=contact or contact_params(test, scenario.vehicle),
-                    track_structure=scenario.track)
+                    track_structure=scenario.track, held=test.held)
 
 
 def disturbed_car(scenario: Scenario):
@@ -245,7 +301,7 @@ def disturbed_car(scenario: Scenario):
                     speed_m_per_s=test.nonlinear_speeds_m_per_s[0], guidance="contact",
                     contact=contact_params(test, scenario.vehicle), track_structure=scenario.track,
                     spectral_radius=scenario.solver.spectral_radius,
-                    wheelset_lateral_offset_m=[test.disturbances_m[0]] * 4)
+                    wheelset_lateral_offset_m=[test.disturbances_m[0]] * 4, held=test.held)
 
 
 def ramping_car(scenario: Scenario):
@@ -258,7 +314,7 @@ def ramping_car(scenario: Scenario):
                     contact=contact_params(test, scenario.vehicle), track_structure=scenario.track,
                     spectral_radius=scenario.solver.spectral_radius,
                     wheelset_lateral_offset_m=[test.ramp_disturbance_m] * 4,
-                    deceleration=(test.ramp_hold_s, test.ramp_decelerations_m_per_s2[0]))
+                    deceleration=(test.ramp_hold_s, test.ramp_decelerations_m_per_s2[0]), held=test.held)
 
 
 def static_stiffness_N_per_m(air) -> np.ndarray:
