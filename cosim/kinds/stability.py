@@ -47,6 +47,9 @@ BODY_MODES = ("carbody bounce", "carbody pitch", "carbody yaw", "carbody lower s
 HELD = ("free", "held")
 #: the bogies that run free: both, or the front one alone (the rear one held; with the carbody held)
 BOGIES = ("both", "front")
+#: a cone's contact angles: atan(lambda) and the roll (tilted), or 0 (level: an experiment,
+#: :meth:`vehicle.wheelrail.geometry.ContactTable.cone`)
+CONE_CONTACT = ("tilted", "level")
 #: airspring models of a case: the air in the eigenvalue problem, or each airspring its static stiffness
 AIRSPRINGS = ("circuit", "static")
 #: the brute force's growth rate is fitted to the peaks up to this many times the disturbance: small
@@ -94,6 +97,8 @@ class StabilityTest:
     bogies: str = "both"
     frame_roll: str = "free"
     roll_rate_creepage: bool = True
+    cone_contact: str = "tilted"
+    friction_coefficient: Optional[float] = None
     f11_N: Optional[float] = None
     f22_N: Optional[float] = None
     f23_N_m: Optional[float] = None
@@ -115,6 +120,8 @@ class StabilityTest:
         "max_frequency_Hz": positive("Hz"),
         "conicity": Range(0.0, 0.8, False, True, "", "equivalent conicities of wheels in service: 0.01-0.6"),
         "equivalent_conicity": Range(0.0, 0.8, False, True, "", "equivalent conicities of wheels in service: 0.01-0.6"),
+        "friction_coefficient": Range(0.0, 100.0, False, True, "", "0.36 by default; a large value keeps the "
+                                                                    "steady creep forces off saturation (an experiment)"),
         "f11_N": Range(0.0, 1e9, False, True, "N", "Kalker's f11 of a wheel: ~1e7 N under ~60 kN"),
         "f22_N": Range(0.0, 1e9, False, True, "N", "Kalker's f22 of a wheel: ~1e7 N under ~60 kN"),
         "f23_N_m": Range(0.0, 1e7, unit="N m", why="Kalker's f23 of a wheel: ~1e4-1e5 N m; 0: no spin creep force"),
@@ -170,10 +177,12 @@ def parse(data, vehicle: VehicleParams, path: Path) -> StabilityTest:
     if test.cone is not None and test.wheel_profile is not None:
         raise ScenarioError(path, ["stability", "wheel_profile"], "give either equivalent_conicity (a cone) or "
                                                                    "wheel_profile (a profile file), not both")
-    for key, allowed in (("carbody", HELD), ("bogies", BOGIES), ("frame_roll", HELD)):
+    for key, allowed in (("carbody", HELD), ("bogies", BOGIES), ("frame_roll", HELD), ("cone_contact", CONE_CONTACT)):
         if getattr(test, key) not in allowed:
             raise ScenarioError(path, ["stability", key], f"expected one of {', '.join(allowed)}, got "
                                                           f"{getattr(test, key)!r}")
+    if test.cone_contact != "tilted" and test.cone is None:
+        raise ScenarioError(path, ["stability", "cone_contact"], "a cone's contact angles: give equivalent_conicity")
     if test.bogies == "front" and test.carbody != "held":
         raise ScenarioError(path, ["stability", "bogies"], "one bogie alone needs the carbody held (carbody: held): "
                                                             "a free carbody couples the two bogies")
@@ -256,16 +265,18 @@ def contact_table_csv(test: StabilityTest, vehicle: VehicleParams) -> str:
         return ""
     profile = test.wheel_profile
     stamp = os.stat(profile).st_mtime_ns if profile is not None else None   # a profile edited since: anew
-    return _table_file(test.cone, profile, stamp, float(vehicle.wheel_radius_m), 0.5 * float(vehicle.contact_spacing_m))
+    return _table_file(test.cone, profile, stamp, float(vehicle.wheel_radius_m), 0.5 * float(vehicle.contact_spacing_m),
+                       test.cone_contact == "level")
 
 
 @functools.lru_cache(maxsize=16)
-def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp, r0: float, e: float) -> str:
+def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp, r0: float, e: float,
+                level: bool = False) -> str:
     """A cone's table: knife-edge rails at +-e, the car's contact spacing / 2 (0.75 m for the metro
-    car, the cone's default)."""
+    car, the cone's default); ``level``: its contact angles 0 (an experiment)."""
     from vehicle.wheelrail.derive_table import derive_default  # exudyn-free, but heavy
     from vehicle.wheelrail.geometry import ContactTable
-    table = (ContactTable.cone(conicity, r0_m=r0, half_spacing_m=e) if conicity is not None
+    table = (ContactTable.cone(conicity, r0_m=r0, half_spacing_m=e, level_contact=level) if conicity is not None
              else derive_default(r0, wheel_file=wheel_profile))
     text = table.to_csv()
     file = Path(tempfile.gettempdir()) / "pneumorail_tables" / f"{hashlib.sha256(text.encode()).hexdigest()[:16]}.csv"
@@ -277,6 +288,8 @@ def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp,
 
 def contact_params(test: StabilityTest, vehicle: VehicleParams) -> ContactParams:
     given = {} if test.contact_smoothing_mm is None else {"table_smoothing_mm": test.contact_smoothing_mm}
+    if test.friction_coefficient is not None:
+        given["friction_coefficient"] = test.friction_coefficient
     return ContactParams(table_csv=contact_table_csv(test, vehicle), creep_coefficients=test.creep_coefficients,
                          roll_rate_creepage=test.roll_rate_creepage, **given)
 
