@@ -11,10 +11,11 @@ spring of its static stiffness, the usual reduced model; its k decides isotherma
 The table ``modes.csv`` lists every mode below ``max_frequency_Hz`` at every speed. Figures: the
 root locus with speed as the parameter and the damping ratio of each mode family against speed.
 
-The wheel-rail contact: the S1002 / UIC60 1:40 table (default), a cone of ``conicity`` on
-knife-edge rails (:meth:`~vehicle.wheelrail.geometry.ContactTable.cone`), or ``wheel_profile``, a
+The wheel-rail contact: the S1002 / UIC60 1:40 table (default), a cone of ``equivalent_conicity``
+on knife-edge rails (:meth:`~vehicle.wheelrail.geometry.ContactTable.cone`), or ``wheel_profile``, a
 wheel profile file (SIMPACK .prw or two columns) on the UIC60 rail, the table derived as for the
-default pair.
+default pair. The car free on its suspension (default), or its carbody held (with one bogie or
+both): the Cooperrider configuration of running-stability studies.
 """
 from __future__ import annotations
 
@@ -66,10 +67,24 @@ class StabilityTest:
     ``resolution_m_per_s``: the bisection's final bracket of the critical speed.
     ``reference_speed_m_per_s``: where the carbody modes are reported (default: the first speed).
     ``max_frequency_Hz``: modes above it (the wheelsets on their contacts, ~30-300 Hz) are left
-    out of ``modes.csv`` and the figures, not out of the critical speed. ``conicity`` (a cone on
-    knife-edge rails) or ``wheel_profile`` (a file, relative to the scenario, on the UIC60 rail):
-    the wheel-rail pair instead of S1002 / UIC60 1:40. ``contact_smoothing_mm``: the contact
-    table's smoothing (null: 0.1 mm). ``valve_settings``: as a curve's.
+    out of ``modes.csv`` and the figures, not out of the critical speed. ``equivalent_conicity``
+    (a cone on knife-edge rails at +-contact_spacing_m/2 whose rolling radii differ by 2 lambda y:
+    the equivalent conicity, not the cone's slope; ``conicity`` is its older name and means the
+    same) or ``wheel_profile`` (a file, relative to the scenario, on the UIC60 rail): the
+    wheel-rail pair instead of S1002 / UIC60 1:40. ``contact_smoothing_mm``: the contact table's
+    smoothing (null: 0.1 mm). ``valve_settings``: as a curve's.
+
+    The Cooperrider configuration (docs/validation.md): ``carbody: held`` runs the carbody at
+    constant speed without lateral, roll or yaw motion (vertical and pitch stay on the
+    airsprings); ``bogies: front`` holds the rear bogie too (its frame without lateral, roll and
+    yaw motion, its wheelsets without lateral and yaw motion; needs the carbody held). ``f11_N``,
+    ``f22_N``, ``f23_N_m``, ``f33_N_m2``: Kalker's linear creep coefficients per wheel given (all
+    four or none; the same at every normal force), instead of the contact law's (Hertz ellipse,
+    Kalker's table, scaled with the load). Experiments, to switch one term off: ``frame_roll:
+    held`` (the frames without roll), ``roll_rate_creepage: false`` (the lateral creepage without
+    r roll'/V), ``cone_contact: level`` (the cone's contact angles 0: no gravitational stiffness,
+    spin creepage or lateral share of the load transfer), ``friction_coefficient`` (null: 0.36;
+    large: the steady creep forces off saturation).
 
     Brute force (the nonlinear critical speed; none without ``nonlinear_speeds_m_per_s``): at
     each of those speeds and for each of ``disturbances_m`` (every wheelset released at that
