@@ -129,7 +129,8 @@ class StabilityTest:
     ramp_disturbance_m: float = 0.003
 
     FIELD_RANGES = {
-        "speeds_m_per_s": Range(0.0, 150.0, False, True, "m/s", "540 km/h at most (a bogie on a low conicity hunts above service speeds, scenarios/cooperrider.yaml); > 0 (creepages are relative to V)"),
+        "speeds_m_per_s": Range(0.0, 150.0, False, True, "m/s", "540 km/h at most (a bogie on a low conicity hunts "
+                                "above service speeds, scenarios/cooperrider.yaml); > 0 (creepages are relative to V)"),
         "resolution_m_per_s": Range(1e-3, 10.0, unit="m/s", why="the bisection's final bracket"),
         "reference_speed_m_per_s": Range(0.0, 150.0, False, True, "m/s"),
         "max_frequency_Hz": positive("Hz"),
