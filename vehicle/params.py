@@ -230,6 +230,13 @@ class VehicleParams:
     # Height above rail, near the bogie frame's side beam top.
     yaw_damper_height_m: float = field(default=0.8, metadata=_HEIGHT)
 
+    # --- secondary yaw stiffness, one per bogie: a yaw couple between bogie frame and carbody ---
+    # k (psi_frame - psi_carbody), in parallel with the yaw the bellows' shear already gives
+    # (2 k_shear (airspring spacing / 2)^2 per bogie). Stands for a yaw stiffness the bellows do
+    # not carry: a friction-free side-bearer or a model's longitudinal secondary springs (the
+    # Cooperrider bogie's k6 at +-d6, cooperrider_bogie()). 0: none.
+    secondary_yaw_stiffness_N_m_per_rad: float = field(default=0.0, metadata=_TORSION)
+
     # --- traction rod (or centre pivot), one per bogie: longitudinal, at the bogie centre ---
     # Longitudinal stiffness of the rod's rubber bushes, 5-20 MN/m [I]. 0: none (the bellows'
     # shear then holds the carbody longitudinally, as in the paper's car).
@@ -336,6 +343,15 @@ class ContactParams:
     # UIC60 1:40 / 1435 mm table for the car's wheel radius (shipped for 0.42 m and 0.46 m,
     # vehicle/wheelrail/data, else derived from the profiles in ~2 s).
     table_csv: str = ""
+    # Kalker's linear creep coefficients given instead of computed from the contact ellipse:
+    # (f11 [N], f22 [N], f23 [N m], f33 [N m^2]) per wheel, the same at every normal force (the
+    # law's own scale with the load, (N/N_ref)^(2/3), ^1, ^(4/3), is then off), as linear models
+    # of the literature give them. () = from the contact law (Hertz ellipse, Kalker's table).
+    creep_coefficients: tuple = ()
+    # The lateral creepage's roll-rate part r roll'/V (the contact point lies r below the axle):
+    # False leaves it out, as classical linear wheelset models do -- an experiment, to show what
+    # it does to a result (docs/validation.md), not a model choice.
+    roll_rate_creepage: bool = True
 
     def __post_init__(self):
         if not (self.friction_coefficient > 0.0 and math.isfinite(self.friction_coefficient)):
@@ -475,6 +491,56 @@ def metro_car_arb_dampers() -> VehicleParams:
         traction_rod_damping_N_s_per_m=30.0e3,
         emergency_spring_stiffness_N_per_m=2.0e6,
         vertical_bumpstop_stiffness_N_per_m=10.0e6,
+    )
+
+
+def cooperrider_bogie() -> VehicleParams:
+    """The Cooperrider bogie (truck) with the parameter set of the open DYTSI code (D. Bigoni,
+    DTU, github.com/daniele-bigoni/dytsi; tests/independent/README.md lists each value with its
+    file and line), mapped onto this car: for running-stability studies under a held carbody
+    (kind stability, ``carbody: held``; scenarios/cooperrider.yaml). DYTSI values, as there:
+
+    * wheelset 1022 kg, inertias 678 / 80 / 678 kg m^2 (roll / spin / yaw); frame 2918.9 kg,
+      6780 kg m^2 about every axis; carbody 44388 kg, 2.8e5 / 5.0e5 / 5.0e5 kg m^2 (axle load
+      (44388/4 + 2918.9/2 + 1022) g = 133.2 kN, DYTSI's wheel-rail table 133.3 kN);
+    * half wheelbase b = 1.074 m; contact points 2 e = 2 x 0.75630 m apart (DYTSI's table at
+      y = 0; a cone's knife-edge rails sit there); wheel radius r0 = 0.42488 m (the table's);
+    * primary, per axlebox (two per wheelset at +-s1 = +-0.62 m): longitudinal k2 = 3.646 MN/m,
+      lateral k1 = 1.823 MN/m, no longitudinal or lateral dampers (D3 = D5 = 0);
+    * secondary, per bogie: two lateral springs k4 = 182.3 kN/m (the two bellows' shear), two
+      lateral dampers D2 = 29.2 kN s/m (one damper of 2 D2 at the bogie centre), two longitudinal
+      springs k6 = 903.35 kN/m and dampers D6 = 166.669 kN s/m at +-d6 = +-1.5 m (the dampers:
+      the yaw dampers, 3.0 m apart, linear, rigidly mounted; the springs: a yaw stiffness
+      2 k6 d6^2 = 4.065 MN m/rad, of which the bellows' shear in x at +-1.0 m carries
+      2 k4 (1.0 m)^2 = 0.365 MN m/rad and ``secondary_yaw_stiffness_N_m_per_rad`` the rest).
+
+    Not mapped (the car's values stay, each irrelevant to the lateral linear problem or named
+    in docs/validation.md where it is not): the secondary's longitudinal stiffness (2 k4 here
+    against DYTSI's 2 k6: the frame's longitudinal motion, which the lateral modes do not
+    move); the primary and secondary vertical suspension (DYTSI's vertical springs; here the
+    primary's 1.66 MN/m per axlebox, the metro car's 37 mm static deflection under this load,
+    and the air circuit); the heights of the secondary lateral spring and damper (DYTSI's
+    h1, h2, s2: here the bellows' plates and the damper at 0.9 m), through which the frame's
+    roll, absent from the independent model, meets its lateral motion."""
+    k4, k6, d6 = 1.823e5, 9.0335e5, 1.5          # DYTSI k4, k6 [N/m], d6 = a + l1 + l2 + l3/2 [m]
+    base = VehicleParams()
+    return dataclasses.replace(
+        base,
+        carbody_mass_kg=44388.0, carbody_inertia_xx_kg_m2=2.8e5, carbody_inertia_yy_kg_m2=5.0e5,
+        carbody_inertia_zz_kg_m2=5.0e5,
+        bogie_mass_kg=2918.9, bogie_inertia_xx_kg_m2=6780.0, bogie_inertia_yy_kg_m2=6780.0,
+        bogie_inertia_zz_kg_m2=6780.0,
+        wheelset_mass_kg=1022.0, wheelset_inertia_xx_kg_m2=678.0, wheelset_inertia_yy_kg_m2=80.0,
+        wheelset_inertia_zz_kg_m2=678.0,
+        wheelbase_m=2 * 1.074, contact_spacing_m=2 * 0.756301, wheel_radius_m=0.4248829,
+        primary_lateral_spacing_m=2 * 0.62, primary_stiffness_x_N_per_m=3.646e6,
+        primary_stiffness_y_N_per_m=1.823e6, primary_stiffness_z_N_per_m=1.66e6,
+        primary_damping_x_N_s_per_m=0.0, primary_damping_y_N_s_per_m=0.0,
+        bellow_shear_stiffness_N_per_m=k4,
+        secondary_lateral_damping_N_s_per_m=2 * 2.92e4,
+        yaw_damping_N_s_per_m=166669.0, yaw_damper_lateral_spacing_m=2 * d6,
+        secondary_yaw_stiffness_N_m_per_rad=2 * k6 * d6 ** 2
+        - 2 * k4 * (base.airspring_lateral_spacing_m / 2) ** 2,
     )
 
 

@@ -11,10 +11,11 @@ spring of its static stiffness, the usual reduced model; its k decides isotherma
 The table ``modes.csv`` lists every mode below ``max_frequency_Hz`` at every speed. Figures: the
 root locus with speed as the parameter and the damping ratio of each mode family against speed.
 
-The wheel-rail contact: the S1002 / UIC60 1:40 table (default), a cone of ``conicity`` on
-knife-edge rails (:meth:`~vehicle.wheelrail.geometry.ContactTable.cone`), or ``wheel_profile``, a
+The wheel-rail contact: the S1002 / UIC60 1:40 table (default), a cone of ``equivalent_conicity``
+on knife-edge rails (:meth:`~vehicle.wheelrail.geometry.ContactTable.cone`), or ``wheel_profile``, a
 wheel profile file (SIMPACK .prw or two columns) on the UIC60 rail, the table derived as for the
-default pair.
+default pair. The car free on its suspension (default), or its carbody held (with one bogie or
+both): the Cooperrider configuration of running-stability studies.
 """
 from __future__ import annotations
 
@@ -43,6 +44,14 @@ from vehicle.params import TABLE_SMOOTHING, ContactParams, VehicleParams
 
 #: the carbody's modes reported per case, as the mode labels name them
 BODY_MODES = ("carbody bounce", "carbody pitch", "carbody yaw", "carbody lower sway", "carbody upper sway")
+#: the carbody of a stability analysis: free on its suspension, or held (the Cooperrider
+#: configuration: running at constant speed without lateral, roll or yaw motion)
+HELD = ("free", "held")
+#: the bogies that run free: both, or the front one alone (the rear one held; with the carbody held)
+BOGIES = ("both", "front")
+#: a cone's contact angles: atan(lambda) and the roll (tilted), or 0 (level: an experiment,
+#: :meth:`vehicle.wheelrail.geometry.ContactTable.cone`)
+CONE_CONTACT = ("tilted", "level")
 #: airspring models of a case: the air in the eigenvalue problem, or each airspring its static stiffness
 AIRSPRINGS = ("circuit", "static")
 #: the brute force's growth rate is fitted to the peaks up to this many times the disturbance: small
@@ -55,7 +64,9 @@ STATIC_OMEGA_RAD_PER_S = 1e-6
 
 #: ranges of :class:`StabilityTest`'s fields (metadata): a speed the scan may report at, and a
 #: lateral offset of the wheelsets inside the flangeway
-_SPEED = plausible(0.0, 100.0, "m/s", low_inclusive=False)
+_SPEED = plausible(0.0, 150.0, "m/s", low_inclusive=False)
+#: an equivalent conicity (a cone's: ``conicity`` or ``equivalent_conicity``)
+_CONICITY = plausible(0.0, 0.8, "", "equivalent conicities of wheels in service: 0.01-0.6", low_inclusive=False)
 _DISTURBANCE = Range(0.0, 0.008, False, True, "m", "a lateral offset inside the flangeway (~8 mm)")
 
 
@@ -65,10 +76,24 @@ class StabilityTest:
     ``resolution_m_per_s``: the bisection's final bracket of the critical speed.
     ``reference_speed_m_per_s``: where the carbody modes are reported (default: the first speed).
     ``max_frequency_Hz``: modes above it (the wheelsets on their contacts, ~30-300 Hz) are left
-    out of ``modes.csv`` and the figures, not out of the critical speed. ``conicity`` (a cone on
-    knife-edge rails) or ``wheel_profile`` (a file, relative to the scenario, on the UIC60 rail):
-    the wheel-rail pair instead of S1002 / UIC60 1:40. ``contact_smoothing_mm``: the contact
-    table's smoothing (null: 0.1 mm). ``valve_settings``: as a curve's.
+    out of ``modes.csv`` and the figures, not out of the critical speed. ``equivalent_conicity``
+    (a cone on knife-edge rails at +-contact_spacing_m/2 whose rolling radii differ by 2 lambda y:
+    the equivalent conicity, not the cone's slope; ``conicity`` is its older name and means the
+    same) or ``wheel_profile`` (a file, relative to the scenario, on the UIC60 rail): the
+    wheel-rail pair instead of S1002 / UIC60 1:40. ``contact_smoothing_mm``: the contact table's
+    smoothing (null: 0.1 mm). ``valve_settings``: as a curve's.
+
+    The Cooperrider configuration (docs/validation.md): ``carbody: held`` runs the carbody at
+    constant speed without lateral, roll or yaw motion (vertical and pitch stay on the
+    airsprings); ``bogies: front`` holds the rear bogie too (its frame without lateral, roll and
+    yaw motion, its wheelsets without lateral and yaw motion; needs the carbody held). ``f11_N``,
+    ``f22_N``, ``f23_N_m``, ``f33_N_m2``: Kalker's linear creep coefficients per wheel given (all
+    four or none; the same at every normal force), instead of the contact law's (Hertz ellipse,
+    Kalker's table, scaled with the load). Experiments, to switch one term off: ``frame_roll:
+    held`` (the frames without roll), ``roll_rate_creepage: false`` (the lateral creepage without
+    r roll'/V), ``cone_contact: level`` (the cone's contact angles 0: no gravitational stiffness,
+    spin creepage or lateral share of the load transfer), ``friction_coefficient`` (null: 0.36;
+    large: the steady creep forces off saturation).
 
     Brute force (the nonlinear critical speed; none without ``nonlinear_speeds_m_per_s``): at
     each of those speeds and for each of ``disturbances_m`` (every wheelset released at that
@@ -85,15 +110,31 @@ class StabilityTest:
     start speed (it collapses there, or has faded into the decay of a stable car)."""
 
     speeds_m_per_s: Tuple[float, ...] = field(default=tuple(float(v) for v in range(5, 101, 5)), metadata=plausible(
-        0.0, 100.0, "m/s", "360 km/h at most; > 0 (creepages are relative to V)", low_inclusive=False, non_empty=True,
-        unique=True))
+        0.0, 150.0, "m/s", "540 km/h at most (a bogie on a low conicity hunts above service speeds, "
+        "scenarios/cooperrider.yaml); > 0 (creepages are relative to V)", low_inclusive=False, non_empty=True, unique=True))
     resolution_m_per_s: float = field(default=0.1, metadata=plausible(1e-3, 10.0, "m/s", "the bisection's final bracket"))
     reference_speed_m_per_s: Optional[float] = field(default=None, metadata=_SPEED)
     max_frequency_Hz: float = field(default=20.0, metadata=ranged(positive("Hz")))
-    conicity: Optional[float] = field(default=None, metadata=plausible(
-        0.0, 0.8, "", "equivalent conicities of wheels in service: 0.01-0.6", low_inclusive=False))
+    conicity: Optional[float] = field(default=None, metadata=_CONICITY)
+    equivalent_conicity: Optional[float] = field(default=None, metadata=_CONICITY)
     wheel_profile: Optional[str] = None
     contact_smoothing_mm: Optional[float] = field(default=None, metadata=TABLE_SMOOTHING)
+    carbody: str = "free"
+    bogies: str = "both"
+    frame_roll: str = "free"
+    roll_rate_creepage: bool = True
+    cone_contact: str = "tilted"
+    friction_coefficient: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 100.0, "", "0.36 by default; a large value keeps the steady creep forces off saturation (an experiment)",
+        low_inclusive=False))
+    f11_N: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 1e9, "N", "Kalker's f11 of a wheel: ~1e7 N under ~60 kN", low_inclusive=False))
+    f22_N: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 1e9, "N", "Kalker's f22 of a wheel: ~1e7 N under ~60 kN", low_inclusive=False))
+    f23_N_m: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 1e7, "N m", "Kalker's f23 of a wheel: ~1e4-1e5 N m; 0: no spin creep force"))
+    f33_N_m2: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 1e6, "N m^2", "Kalker's f33 of a wheel: ~10-1e3 N m^2; 0: no spin moment"))
     valve_settings: Tuple[bool, ...] = field(default=(False,), metadata=ranged(non_empty=True, unique=True))
     nonlinear_speeds_m_per_s: Tuple[float, ...] = field(default=(), metadata=plausible(
         0.0, 100.0, "m/s", "360 km/h at most", low_inclusive=False, unique=True))
@@ -114,6 +155,24 @@ class StabilityTest:
         return self.ramp_hold_s + (self.ramp_from_m_per_s - self.ramp_to_m_per_s) / deceleration_m_per_s2
 
     @property
+    def cone(self) -> Optional[float]:
+        """The cone's equivalent conicity (``equivalent_conicity``, or ``conicity``, its older
+        name), None: no cone."""
+        return self.equivalent_conicity if self.equivalent_conicity is not None else self.conicity
+
+    @property
+    def creep_coefficients(self) -> Tuple[float, ...]:
+        """(f11, f22, f23, f33) given, () = from the contact law."""
+        given = (self.f11_N, self.f22_N, self.f23_N_m, self.f33_N_m2)
+        return () if self.f11_N is None else tuple(float(f) for f in given)
+
+    @property
+    def held(self) -> Tuple[str, ...]:
+        """What the car holds (:data:`vehicle.car.options.HOLDS`)."""
+        return ((("carbody",) if self.carbody == "held" else ()) + (("rear bogie",) if self.bogies == "front" else ())
+                + (("bogie roll",) if self.frame_roll == "held" else ()))
+
+    @property
     def reference_speed(self) -> float:
         return self.reference_speed_m_per_s if self.reference_speed_m_per_s is not None else self.speeds_m_per_s[0]
 
@@ -121,9 +180,26 @@ class StabilityTest:
 def parse(data, vehicle: VehicleParams, path: Path) -> StabilityTest:
     test = build(StabilityTest, data, path, ["stability"])
     check_valve_settings(test.valve_settings, path, ["stability", "valve_settings"])
-    if test.conicity is not None and test.wheel_profile is not None:
-        raise ScenarioError(path, ["stability", "wheel_profile"], "give either conicity (a cone) or wheel_profile "
-                                                                   "(a profile file), not both")
+    if test.conicity is not None and test.equivalent_conicity is not None:
+        raise ScenarioError(path, ["stability", "conicity"], "conicity is the older name of equivalent_conicity: "
+                                                              "give one of them")
+    if test.cone is not None and test.wheel_profile is not None:
+        raise ScenarioError(path, ["stability", "wheel_profile"], "give either equivalent_conicity (a cone) or "
+                                                                   "wheel_profile (a profile file), not both")
+    for key, allowed in (("carbody", HELD), ("bogies", BOGIES), ("frame_roll", HELD), ("cone_contact", CONE_CONTACT)):
+        if getattr(test, key) not in allowed:
+            raise ScenarioError(path, ["stability", key], f"expected one of {', '.join(allowed)}, got "
+                                                          f"{getattr(test, key)!r}")
+    if test.cone_contact != "tilted" and test.cone is None:
+        raise ScenarioError(path, ["stability", "cone_contact"], "a cone's contact angles: give equivalent_conicity")
+    if test.bogies == "front" and test.carbody != "held":
+        raise ScenarioError(path, ["stability", "bogies"], "one bogie alone needs the carbody held (carbody: held): "
+                                                            "a free carbody couples the two bogies")
+    creep = (test.f11_N, test.f22_N, test.f23_N_m, test.f33_N_m2)
+    if any(f is not None for f in creep) and any(f is None for f in creep):
+        raise ScenarioError(path, ["stability", "f11_N"], "give all four creep coefficients (f11_N, f22_N, f23_N_m, "
+                                                           "f33_N_m2; 0 switches a term off) or none (from the "
+                                                           "contact law)")
     if test.ramp_from_m_per_s is not None and not test.ramp_to_m_per_s < test.ramp_from_m_per_s:
         raise ScenarioError(path, ["stability", "ramp_to_m_per_s"], f"the ramp slows down: expected below "
                                                                      f"ramp_from_m_per_s ({test.ramp_from_m_per_s:g} "
@@ -213,18 +289,23 @@ def contact_table_csv(test: StabilityTest, vehicle: VehicleParams) -> str:
     """The contact table the test asks for, as a CSV file (kept in the temporary folder under its
     content's hash); "" for the default S1002 / UIC60 table. Derived once per process and input
     (every car of a run asks for it; a wheel profile's table takes ~1.5 s to derive)."""
-    if test.conicity is None and test.wheel_profile is None:
+    if test.cone is None and test.wheel_profile is None:
         return ""
     profile = test.wheel_profile
     stamp = os.stat(profile).st_mtime_ns if profile is not None else None   # a profile edited since: anew
-    return _table_file(test.conicity, profile, stamp, float(vehicle.wheel_radius_m))
+    return _table_file(test.cone, profile, stamp, float(vehicle.wheel_radius_m), 0.5 * float(vehicle.contact_spacing_m),
+                       test.cone_contact == "level")
 
 
 @functools.lru_cache(maxsize=16)
-def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp, r0: float) -> str:
+def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp, r0: float, e: float,
+                level: bool = False) -> str:
+    """A cone's table: knife-edge rails at +-e, the car's contact spacing / 2 (0.75 m for the metro
+    car, the cone's default); ``level``: its contact angles 0 (an experiment)."""
     from vehicle.wheelrail.derive_table import derive_default  # exudyn-free, but heavy
     from vehicle.wheelrail.geometry import ContactTable
-    table = ContactTable.cone(conicity, r0_m=r0) if conicity is not None else derive_default(r0, wheel_file=wheel_profile)
+    table = (ContactTable.cone(conicity, r0_m=r0, half_spacing_m=e, level_contact=level) if conicity is not None
+             else derive_default(r0, wheel_file=wheel_profile))
     text = table.to_csv()
     file = Path(tempfile.gettempdir()) / "pneumorail_tables" / f"{hashlib.sha256(text.encode()).hexdigest()[:16]}.csv"
     if not file.exists():                                  # whole or not at all (a killed write leaves no table)
@@ -235,7 +316,10 @@ def _table_file(conicity: Optional[float], wheel_profile: Optional[str], _stamp,
 
 def contact_params(test: StabilityTest, vehicle: VehicleParams) -> ContactParams:
     given = {} if test.contact_smoothing_mm is None else {"table_smoothing_mm": test.contact_smoothing_mm}
-    return ContactParams(table_csv=contact_table_csv(test, vehicle), **given)
+    if test.friction_coefficient is not None:
+        given["friction_coefficient"] = test.friction_coefficient
+    return ContactParams(table_csv=contact_table_csv(test, vehicle), creep_coefficients=test.creep_coefficients,
+                         roll_rate_creepage=test.roll_rate_creepage, **given)
 
 
 def make_car(scenario: Scenario, speed_m_per_s: Optional[float] = None, contact: Optional[ContactParams] = None):
@@ -246,7 +330,7 @@ def make_car(scenario: Scenario, speed_m_per_s: Optional[float] = None, contact:
     v = test.speeds_m_per_s[0] if speed_m_per_s is None else speed_m_per_s
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s, speed_m_per_s=float(v),
                     guidance="contact", contact=contact or contact_params(test, scenario.vehicle),
-                    track_structure=scenario.track)
+                    track_structure=scenario.track, held=test.held)
 
 
 def disturbed_car(scenario: Scenario):
@@ -258,7 +342,7 @@ def disturbed_car(scenario: Scenario):
                     speed_m_per_s=test.nonlinear_speeds_m_per_s[0], guidance="contact",
                     contact=contact_params(test, scenario.vehicle), track_structure=scenario.track,
                     spectral_radius=scenario.solver.spectral_radius,
-                    wheelset_lateral_offset_m=[test.disturbances_m[0]] * 4)
+                    wheelset_lateral_offset_m=[test.disturbances_m[0]] * 4, held=test.held)
 
 
 def ramping_car(scenario: Scenario):
@@ -271,7 +355,7 @@ def ramping_car(scenario: Scenario):
                     contact=contact_params(test, scenario.vehicle), track_structure=scenario.track,
                     spectral_radius=scenario.solver.spectral_radius,
                     wheelset_lateral_offset_m=[test.ramp_disturbance_m] * 4,
-                    deceleration=(test.ramp_hold_s, test.ramp_decelerations_m_per_s2[0]))
+                    deceleration=(test.ramp_hold_s, test.ramp_decelerations_m_per_s2[0]), held=test.held)
 
 
 def static_stiffness_N_per_m(air) -> np.ndarray:

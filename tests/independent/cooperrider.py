@@ -78,7 +78,7 @@ A(V) = [[0, I], [-M^-1 K(V), -M^-1 C(V)]]. The linear critical speed is the lowe
 max Re eig A(V) crosses zero from below (found by a grid scan, then brentq to xtol 1e-4 m/s);
 the hunting frequency is |Im| / (2 pi) of that eigenvalue at the critical speed.
 
-Checks that cannot be faked (tests/independent/test_cooperrider.py): Klingel's kinematic
+Checks that cannot be faked (tests/independent/test_independent_cooperrider.py): Klingel's kinematic
 wavelength L = 2*pi*sqrt(e*r0/lam) of a free wheelset, the rigid-bogie kinematic wavelength
 L = 2*pi*sqrt(e*r0/lam*(1 + (f22/f11)*b**2/e**2)) (Wickens 2003, ch. 2, for f11 = f22), and the Routh-Hurwitz stability
 boundary of a single wheelset on a fixed frame, derived by hand from the two equations above.

@@ -15,7 +15,7 @@ from exudyn.rigidBodyUtilities import RigidBodyInertia
 from ..params import WHEELS, VehicleParams
 from ..payload import CarbodyMass
 from .contact import ContactGuidance
-from .options import ModelOptions
+from .options import HOLDS, ModelOptions
 from .path import CarPath
 from .secondary import (
     AirspringConnectors,
@@ -125,6 +125,8 @@ class _Builder:
             guidance_vars.append(self.wheelset_guidance(iw))
             self.primary(iw)
         drive, drive_vars = self.drive() if self.contact is not None and self.path.guided else (None, None)
+        for name in self.options.held:
+            self.hold(name)
         mounts = Mounts(mbs, p, self.carbody, self.bogies, static.bogie_x_m, self.keep_alive)
         airsprings = add_airsprings(mounts, static)
         bumpstops = add_lateral_bumpstops(mounts)
@@ -227,6 +229,22 @@ class _Builder:
                                        constrainedAxes=[1, 0, 0, 0, 0, 0], show=False)
         self._set_offset_function(joint, offset, zero)
         return joint, (xi, rz)
+
+    def hold(self, name: str) -> None:
+        """Hold what :data:`.options.HOLDS` ``name`` says: per body a ``GenericJoint`` to the ground
+        at the body's centre of gravity that locks the axes given (global x, y, z, roll, pitch,
+        yaw; lateral and rotations only, so the body still runs along x at the car's speed).
+        Straight track only: the joint frame is the ground's."""
+        if self.path.track is not None:
+            raise ValueError("held bodies need straight track (track=None): the holding joints do not "
+                             "follow a track's heading")
+        bodies = {"carbody": self.carbody, **{f"bogie {i + 1}": b for i, b in enumerate(self.bogies)},
+                  **{f"wheelset {i + 1}": w for i, w in enumerate(self.wheelsets)}}
+        for body, axes in HOLDS[name]:
+            node = self.mbs.GetNode(self.mbs.GetObject(bodies[body])["nodeNumber"])
+            position = [float(c) for c in node["referenceCoordinates"][:3]]
+            self.mbs.CreateGenericJoint(itemNumbers=[self.ground, bodies[body]], position=position,
+                                        constrainedAxes=list(axes), show=False)
 
     def primary(self, iw: int) -> None:
         """Left and right axlebox springs between bogie frame and wheelset ``iw``.

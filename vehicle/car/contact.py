@@ -56,14 +56,16 @@ def contact_guidance(p: VehicleParams, cp: ContactParams, static: StaticReferenc
         gravity_m_per_s2=g, hertz_constant_N_per_m1_5=p.hertz_constant_N_per_m1_5,
         contact_damping_N_s_per_m=cp.normal_damping_N_s_per_m,
         friction_coefficient=cp.friction_coefficient)
-    law = ContactLawTable(table, wp, smoothing_mm=cp.table_smoothing_mm)
+    law = ContactLawTable(table, wp, smoothing_mm=cp.table_smoothing_mm,
+                          given_creep=tuple(cp.creep_coefficients) or None)
     r0 = table.r0
 
     def contact_model(z_centre):
         refs = [[float(x) + path.x0_m, 0.0, z_centre] for x in static.wheelset_x_m]
         return WheelsetTrackContact(law, wp, refs, r0, path.speed_m_per_s,
                                     cp.min_creep_speed_m_per_s, cp.flange_angle_rad,
-                                    2.0 * static.wheel_load_N if flexible_track else None)
+                                    2.0 * static.wheel_load_N if flexible_track else None,
+                                    cp.roll_rate_creepage)
 
     # the wheelset centre sits r0 above the rail plane in the rigid centred contact and
     # approaches it by the Hertz deflection under the static wheel load

@@ -27,22 +27,44 @@ CONTACT_NEWTON_REL_TOL = 1e-6
 #: the ways the wheelsets can be held on the track (``guidance``)
 GUIDANCES = ("kinematic", "contact")
 
+#: what a car with contact guidance on straight track can have held (``held``), each by a joint
+#: to the ground that moves with the car (:meth:`vehicle.car.build._Builder.hold`): name ->
+#: ((body, constrained axes of x, y, z, roll, pitch, yaw), ...). "carbody": the Cooperrider
+#: configuration of running-stability studies, a carbody that runs at constant speed with no
+#: lateral, roll or yaw motion (vertical and pitch stay on the airsprings); "rear bogie": the
+#: rear frame and its wheelsets without lateral and yaw motion (the frame also without roll), so
+#: that only the front bogie runs free (with the carbody held the bogies do not meet in the
+#: lateral plane); "bogie roll": both frames without roll (an experiment: what frame roll does)
+HOLDS = {
+    "carbody": (("carbody", (0, 1, 0, 1, 0, 1)),),
+    "rear bogie": (("bogie 2", (0, 1, 0, 1, 0, 1)), ("wheelset 3", (0, 1, 0, 0, 0, 1)),
+                   ("wheelset 4", (0, 1, 0, 0, 0, 1))),
+    "bogie roll": (("bogie 1", (0, 0, 0, 1, 0, 0)), ("bogie 2", (0, 0, 0, 1, 0, 0))),
+}
+
 
 @dataclass(frozen=True)
 class ModelOptions:
-    """What is built: the guidance, its contact, the track structure, the optional carbody load
-    and the wheelsets' initial lateral offsets. ``track_structure`` None becomes the rigid
-    :class:`~vehicle.params.TrackStructure`."""
+    """What is built: the guidance, its contact, the track structure, the optional carbody load,
+    the wheelsets' initial lateral offsets and what is held (:data:`HOLDS`; straight track
+    only). ``track_structure`` None becomes the rigid :class:`~vehicle.params.TrackStructure`."""
 
     guidance: str = "kinematic"
     contact: ContactParams | None = None
     track_structure: TrackStructure | None = None
     carbody_load: bool = False
     wheelset_lateral_offset_m: Sequence[float] | None = None
+    held: Sequence[str] = ()
 
     def __post_init__(self):
         if self.guidance not in GUIDANCES:
             raise ValueError(f"guidance must be 'kinematic' or 'contact', got {self.guidance!r}")
+        unknown = [h for h in self.held if h not in HOLDS]
+        if unknown:
+            raise ValueError(f"held: unknown {', '.join(map(repr, unknown))}; known: {', '.join(HOLDS)}")
+        if self.held and not self.contact_guidance:
+            raise ValueError("held needs guidance='contact' (the kinematic guidance holds the wheelsets already)")
+        object.__setattr__(self, "held", tuple(self.held))
         if self.track_structure is None:
             object.__setattr__(self, "track_structure", TrackStructure())
 

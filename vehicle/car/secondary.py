@@ -4,6 +4,7 @@ components, anti-roll bars, traction rods and dampers (:func:`add_optional_compo
 model is described in :mod:`vehicle.car`."""
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -61,6 +62,7 @@ class SecondaryDamper:
 def check_components(p: VehicleParams) -> None:
     """ValueError naming the field when an optional component's parameters are inconsistent."""
     nonnegative = ("arb_roll_stiffness_N_m_per_rad", "arb_torsion_stiffness_N_m_per_rad",
+                   "secondary_yaw_stiffness_N_m_per_rad",
                    "traction_rod_stiffness_N_per_m", "traction_rod_damping_N_s_per_m",
                    "vertical_bumpstop_clearance_m", "vertical_bumpstop_stiffness_N_per_m")
     for kind in ("secondary_vertical", "secondary_lateral", "yaw"):
@@ -254,6 +256,8 @@ class OptionalComponents:
     dampers: list
     #: symbolic variable: the internal step size [s] the Maxwell laws read (None without any)
     maxwell_step: Any
+    #: secondary yaw springs, per bogie
+    yaw_springs: list = dataclasses.field(default_factory=list)
 
     @property
     def maxwell(self) -> list:
@@ -265,7 +269,7 @@ def add_optional_components(m: Mounts, step_s: float) -> OptionalComponents:
     """Per bogie the anti-roll bar, the traction rod and the dampers that the parameters ask
     for, then the Maxwell elements' force laws (they read the step size)."""
     p = m.params
-    arbs, rods, dampers = [], [], []
+    arbs, rods, dampers, yaw_springs = [], [], [], []
     k_arb = p.arb_roll_stiffness_N_m_per_rad + arb_roll_stiffness_N_m_per_rad(
         p.arb_torsion_stiffness_N_m_per_rad, p.arb_lever_arm_m, p.arb_link_spacing_m)
     for ib in range(2):
@@ -273,6 +277,8 @@ def add_optional_components(m: Mounts, step_s: float) -> OptionalComponents:
             arbs.append(_add_anti_roll_bar(m, ib, k_arb))
         if p.traction_rod_stiffness_N_per_m > 0.0 or p.traction_rod_damping_N_s_per_m > 0.0:
             rods.append(_add_traction_rod(m, ib))
+        if p.secondary_yaw_stiffness_N_m_per_rad > 0.0:
+            yaw_springs.append(_add_yaw_spring(m, ib, p.secondary_yaw_stiffness_N_m_per_rad))
         dampers += _add_dampers(m, ib)
     maxwell = [d for d in dampers if d.maxwell]
     h_step = None
@@ -281,7 +287,7 @@ def add_optional_components(m: Mounts, step_s: float) -> OptionalComponents:
         m.keep_alive.append(h_step)
         for d in maxwell:
             _set_maxwell_function(m, d, h_step)
-    return OptionalComponents(arbs, rods, dampers, h_step)
+    return OptionalComponents(arbs, rods, dampers, h_step, yaw_springs)
 
 
 def _add_anti_roll_bar(m: Mounts, ib: int, k_roll: float) -> int:
@@ -292,6 +298,16 @@ def _add_anti_roll_bar(m: Mounts, ib: int, k_roll: float) -> int:
     (no point of application); the markers sit at the bogie centre, lower-plate height."""
     K = np.zeros((6, 6))
     K[3, 3] = k_roll
+    return m.mbs.CreateRigidBodySpringDamper(
+        stiffness=K, **m.between(ib, 0.0, 0.0, m.params.airspring_lower_height_m))
+
+
+def _add_yaw_spring(m: Mounts, ib: int, k_yaw: float) -> int:
+    """Secondary yaw spring of bogie ``ib``: a yaw couple k_yaw (psi_carbody - psi_frame) between
+    bogie frame and carbody, built as the anti-roll bar is (:func:`_add_anti_roll_bar`) with the
+    rotational z stiffness alone: a free couple, no force."""
+    K = np.zeros((6, 6))
+    K[5, 5] = k_yaw
     return m.mbs.CreateRigidBodySpringDamper(
         stiffness=K, **m.between(ib, 0.0, 0.0, m.params.airspring_lower_height_m))
 

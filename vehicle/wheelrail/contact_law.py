@@ -144,11 +144,20 @@ class WheelsetParams:
         """Vertical load per wheel at rest on level track."""
         return 0.5 * (self.axle_load_N + self.mass_kg * self.gravity_m_per_s2)
 
-    def law_constants(self, reference_load_N: float) -> "LawConstants":
-        """The constants :func:`contact` reads, with the table's reference load."""
+    def law_constants(self, reference_load_N: float, creep_follows_load: bool = True,
+                      roll_rate_creepage: bool = True) -> "LawConstants":
+        """The constants :func:`contact` reads, with the table's reference load; with
+        ``creep_follows_load`` False the creep coefficients stay the table's at every load
+        (given coefficients, :class:`ContactLawTable`: load ratio 0 N + 1); with
+        ``roll_rate_creepage`` False the lateral creepage leaves the roll rate out."""
+        if creep_follows_load:
+            inverse, offset = 1.0 / float(reference_load_N), 0.0
+        else:
+            inverse, offset = 0.0, 1.0
         return LawConstants(float(self.hertz_constant_N_per_m1_5),
                             float(self.contact_damping_N_s_per_m),
-                            float(self.friction_coefficient), 1.0 / float(reference_load_N))
+                            float(self.friction_coefficient), inverse, offset,
+                            1.0 if roll_rate_creepage else 0.0)
 
 
 class WheelsetState(NamedTuple):
@@ -209,6 +218,12 @@ class LawConstants(NamedTuple):
     damping: float  # normal contact damping, N s/m
     friction_coefficient: float
     inv_reference_load: float  # 1 / the table's reference load of the Kalker coefficients, 1/N
+    # added to N * inv_reference_load: 0 (coefficients scale with the load), or 1 with
+    # inv_reference_load 0 (given coefficients, the same at every load)
+    creep_load_offset: float = 0.0
+    # factor of the roll rate's part of the lateral creepage, r roll'/V: 1 (the kinematics), 0
+    # leaves it out as classical linear models do (an experiment: ContactParams.roll_rate_creepage)
+    roll_rate_creep: float = 1.0
 
 
 class WheelContact(NamedTuple):
@@ -291,8 +306,15 @@ class ContactLawTable:
     """
 
     def __init__(self, table: ContactTable, params: WheelsetParams | None = None,
-                 reference_load_N: float = 50.0e3, smoothing_mm: float | None = SMOOTHING_MM):
+                 reference_load_N: float = 50.0e3, smoothing_mm: float | None = SMOOTHING_MM,
+                 given_creep: tuple | None = None):
         p = params or WheelsetParams()
+        #: the creep coefficients scale with the normal force (False: ``given_creep``, the same
+        #: (f11 [N], f22 [N], f23 [N m], f33 [N m^2]) on every row and at every load, as a
+        #: linear model with given coefficients has them)
+        self.creep_follows_load = not given_creep
+        if given_creep and not (len(given_creep) == 4 and all(v >= 0 and math.isfinite(v) for v in given_creep)):
+            raise ValueError(f"given_creep: four finite coefficients >= 0 (f11, f22, f23, f33), got {given_creep!r}")
         if not reference_load_N > 0:
             raise ValueError("reference_load_N must be positive")
         if smoothing_mm is not None and not (smoothing_mm >= 0 and math.isfinite(smoothing_mm)):
@@ -319,6 +341,8 @@ class ContactLawTable:
                 ab = a * b
                 k[:, i] = (G * ab * C.C11, G * ab * C.C22, G * ab ** 1.5 * C.C23,
                            G * ab ** 2 * C.C33)
+            if given_creep:
+                k = np.outer(np.asarray(given_creep, float), np.ones(r.size))
             for j, name in enumerate(("k11", "k22", "k23", "k33")):
                 cols[f"{name}_{side}"] = k[j]
         self.values = np.vstack([cols[n] for n in GEOMETRY_COLUMNS])  # (columns, rows)
@@ -401,13 +425,13 @@ def contact(ops, s, st, g, V, kappa, c, inv_V):
     N = ops.where(delta > 0.0, ops.max(c.hertz_constant * ops.pow(dn, 1.5)
                                        + c.damping * cg * delta_t, c0), c0)
     # --- Kalker coefficients at this load: ellipse size ~ N^(1/3) ---
-    load = N * c.inv_reference_load
+    load = N * c.inv_reference_load + c.creep_load_offset  # N / N_ref (given coefficients: 1)
     ab = ops.pow(load, 2.0 / 3.0)  # a b / (a b)_ref
     f11, f22 = g.k11 * ab, g.k22 * ab
     f23, f33 = g.k23 * load, g.k33 * ops.pow(load, 4.0 / 3.0)
     # --- creepages ---
     xi_x = (V * (1.0 - kappa * yc) + x_t - lever * yaw_t - spin_t * r) * inv_V
-    xi_y = (y_t + r * roll_t - V * yaw) * inv_V / cg
+    xi_y = (y_t + c.roll_rate_creep * r * roll_t - V * yaw) * inv_V / cg
     phi = ((yaw_t + kappa * V) * cg - s * spin_t * sg) * inv_V
     # --- Kalker linear + Shen-Hedrick-Elkins ---
     fx = -f11 * xi_x

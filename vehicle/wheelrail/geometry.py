@@ -475,14 +475,24 @@ class ContactTable:
     @classmethod
     def cone(cls, conicity: float, r0_m: float = 0.46, half_spacing_m: float = 0.75,
              y_max_mm: float = 12.0, dy_mm: float = 0.1,
-             rail_crown_radius_m: float = 0.3) -> "ContactTable":
+             rail_crown_radius_m: float = 0.3, level_contact: bool = False) -> "ContactTable":
         """Analytic table of a pure cone (tan delta = ``conicity``) on knife-edge rails at
         y = +-``half_spacing_m`` (b): the contact points stay at the rails, so
         r_L,R = r0 +- lambda y exactly, roll tan(phi) = lambda y / b, rise dz ~ lambda y^2 / b
         (both wheel points on their rail), contact angles gamma_L,R = atan(lambda) +- phi. For
         the Hertz ellipse the wheel is straight across (kw = 0) and the rail has a crown of
         ``rail_crown_radius_m``. The textbook wheelset for
-        Klingel's formula: its equivalent conicity is lambda at every amplitude."""
+        Klingel's formula: its equivalent conicity is lambda at every amplitude.
+
+        ``conicity`` is the equivalent conicity (r_L - r_R = 2 lambda y), not the slope of a real
+        cone on knife-edge rails, whose contact points move on the wheel by the roll as well
+        (y + r0 phi) and whose equivalent conicity is slope x b / (b - slope r0); the contact
+        angle atan(lambda) stands for the slope (they differ by lambda r0 / b, 5.6 % at 0.1).
+
+        ``level_contact`` (an experiment): every contact angle 0 in the track frame, the normal
+        forces vertical: no gravitational stiffness, no spin creepage from the cone, no lateral
+        share of the normal forces' load transfer -- the wheelset of the textbook linear model
+        without gravitational terms (tests/independent/cooperrider.py, ``gravity=False``)."""
         lam, b = float(conicity), float(half_spacing_m)
         if not (0 < lam < 1 and r0_m > 0 and b > 0 and rail_crown_radius_m > 0):
             raise ValueError("need 0 < conicity < 1 and positive r0, half spacing, crown radius")
@@ -498,7 +508,9 @@ class ContactTable:
         nan = np.full(y.size, np.nan)
         cols = {
             "y_ws_mm": y_mm, "roll_rad": phi, "dz_mm": 1e3 * (h - r0_m),
-            "r_L_m": rL, "r_R_m": rR, "gamma_L_rad": delta + phi, "gamma_R_rad": delta - phi,
+            "r_L_m": rL, "r_R_m": rR,
+            "gamma_L_rad": 0 * y if level_contact else delta + phi,
+            "gamma_R_rad": 0 * y if level_contact else delta - phi,
             "yw_L_mm": -y_mm, "yw_R_mm": y_mm, "yr_L_mm": 0 * y, "yr_R_mm": 0 * y,
             "yc_L_m": np.full(y.size, b), "yc_R_m": np.full(y.size, -b),
             "kw_L_1pm": 0 * y, "kw_R_1pm": 0 * y,
@@ -507,7 +519,7 @@ class ContactTable:
             "gap2_L_mm": nan, "gap2_R_mm": nan, "yw2_L_mm": nan, "yw2_R_mm": nan,
         }
         meta = {"method": f"analytic cone, conicity {lam!r}, knife-edge rails at +-{b!r} m, "
-                          f"r0 {r0_m!r} m"}
+                          f"r0 {r0_m!r} m" + (", level contact (contact angles 0)" if level_contact else "")}
         return cls(cols, meta)
 
     @classmethod

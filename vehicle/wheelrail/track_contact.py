@@ -143,8 +143,8 @@ class _Setup(NamedTuple):
 def _unpacked_setup(row) -> _Setup:
     """The :class:`_Setup` of its values in a flat array (kernels take arrays: numba checks
     their types at every call much faster than those of tuples)."""
-    return _Setup(LawConstants(row[0], row[1], row[2], row[3]), row[4], row[5], row[6], row[7],
-                  row[8])
+    return _Setup(LawConstants(row[0], row[1], row[2], row[3], row[9], row[10]), row[4], row[5], row[6],
+                  row[7], row[8])
 
 
 @jitable
@@ -410,12 +410,14 @@ class WheelsetTrackContact:
             and roll displacement under the wheelset (module docstring), whose support pushes
             up with this force at rest (the static load of the wheelset on its rails, so that
             the track starts at rest at 0).
+        roll_rate_creepage: False leaves the roll rate out of the lateral creepage (an
+            experiment, :attr:`~vehicle.params.ContactParams.roll_rate_creepage`).
     """
 
     def __init__(self, law_table: ContactLawTable, params: WheelsetParams,
                  reference_positions_m, centre_height_m: float, speed_m_per_s: float,
                  min_creep_speed_m_per_s: float = 1.0, flange_angle_rad: float = 0.7,
-                 track_preload_N: float | None = None):
+                 track_preload_N: float | None = None, roll_rate_creepage: bool = True):
         if not speed_m_per_s >= 0.0:
             raise ValueError(f"speed_m_per_s must be >= 0 with contact guidance, got "
                              f"{speed_m_per_s!r}")
@@ -445,9 +447,10 @@ class WheelsetTrackContact:
                        np.ascontiguousarray(law_table.values[idx]),
                        np.ascontiguousarray(law_table.slopes[idx]))
         # the kernels' constants as a flat array (its _Setup: the property below)
-        self._setup_row = np.array([*params.law_constants(self.N_ref), self.V,
-                                    1.0 / self.V_ref, self.r0, params.spin_inertia_kg_m2,
-                                    track_preload_N or 0.0], dtype=float)
+        law = params.law_constants(self.N_ref, law_table.creep_follows_load, roll_rate_creepage)
+        self._setup_row = np.array([*law[:4], self.V, 1.0 / self.V_ref, self.r0, params.spin_inertia_kg_m2,
+                                    track_preload_N or 0.0, law.creep_load_offset, law.roll_rate_creep],
+                                   dtype=float)
         self.set_track([(r[0], 0.0, 0.0, 0.0, 0.0, 0.0) for r in self._ref])
 
     @property

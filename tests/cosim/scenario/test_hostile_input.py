@@ -417,7 +417,7 @@ STABILITY = {  # the stability kind's section
                                 {"stability.ramp_to_m_per_s": 50.0}),
     "ramp decelerating at 5 g": Case("stability", "stability.ramp_decelerations_m_per_s2[0]", "m/s^2",
                                      {"stability.ramp_decelerations_m_per_s2": [50.0]}),
-    "speed in km/h": Case("stability", "stability.speeds_m_per_s[0]", "m/s", {"stability.speeds_m_per_s": [120.0]}),
+    "speed in km/h": Case("stability", "stability.speeds_m_per_s[0]", "m/s", {"stability.speeds_m_per_s": [200.0]}),
     "no speeds": Case("stability", "stability.speeds_m_per_s", "empty", {"stability.speeds_m_per_s": []}),
     "disturbance in mm": Case("stability", "stability.disturbances_m[0]", "m", {"stability.disturbances_m": [3.0]}),
     "cone and profile": Case("stability", "stability.wheel_profile", "not both",
