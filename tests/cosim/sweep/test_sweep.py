@@ -24,7 +24,7 @@ from helpers import SCENARIOS, short_twist, write_scenario
 
 #: two twist heights x two bellow volumes; V0 = 0.5 l drives the bellow beyond its stroke: the case
 #: stops (its air leaves the range of physics, or the circuit diverges within the macro-step)
-GRID = {"twist.twist_per_mille": [3, 4], "circuit.bellow.V0_m3": [0.012, 0.0005]}
+GRID = {"twist.twist_per_mille": [3, 4], "circuit.bellow.V0_m3": [0.012, 0.001]}
 
 
 def base_scenario(tmp_path: Path) -> Path:
@@ -139,8 +139,8 @@ def test_serial_run_records_every_case_and_the_diverged_ones(serial_run):
     assert by[("3", "0.012")]["status"] == by[("4", "0.012")]["status"] == "ok"
     assert float(by[("4", "0.012")]["dqq_max"]) > float(by[("3", "0.012")]["dqq_max"]) > 0.05
     for t in ("3", "4"):                              # diverged: recorded with the diagnosis, the sweep went on
-        diagnosis = by[(t, "0.0005")]["diagnosis"]
-        assert by[(t, "0.0005")]["status"] == "diverged"
+        diagnosis = by[(t, "0.001")]["diagnosis"]
+        assert by[(t, "0.001")]["status"] == "diverged"
         assert "impossible state" in diagnosis or "diverged at t =" in diagnosis
     for case in outcome.prepared.cases:               # each case keeps its own run folder
         folder = outcome.out / "cases" / case.key
@@ -196,7 +196,7 @@ def test_check_evaluates_the_limits_in_every_case_without_rerunning(serial_run, 
     # "Numerical damping")
     assert any("twist.twist_per_mille=4, circuit.bellow.V0_m3=0.012: FAIL dqq_max <= 0.15: 0.16" in line for line in lines)
     for t in (3, 4):
-        mine = [line for line in lines if f"twist.twist_per_mille={t}, circuit.bellow.V0_m3=0.0005:" in line]
+        mine = [line for line in lines if f"twist.twist_per_mille={t}, circuit.bellow.V0_m3=0.001:" in line]
         assert any(": FAIL run completes: " in line for line in mine)
         assert all(": ERROR dqq_max <= 0.15: no value: " in line and line.endswith("(the run diverged)")
                    for line in mine if "dqq_max" in line), mine
