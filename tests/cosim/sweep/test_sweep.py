@@ -22,7 +22,7 @@ from cosim.sweep.executors import Pool, Serial
 
 from helpers import SCENARIOS, short_twist, write_scenario
 
-#: two twist heights x two bellow volumes; V0 = 0.5 l drives the bellow beyond its stroke: the case
+#: two twist heights x two bellow volumes; V0 = 1 l drives the bellow beyond its stroke: the case
 #: stops (its air leaves the range of physics, or the circuit diverges within the macro-step)
 GRID = {"twist.twist_per_mille": [3, 4], "circuit.bellow.V0_m3": [0.012, 0.001]}
 
