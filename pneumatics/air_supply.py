@@ -26,6 +26,15 @@ period is O(h) off, by at most h (2 + w_d / (w_c - w_d) + (w_c - w_d) / w_d) (0.
 arrives after the aftercooler at ``T_delivery_K`` (None: the atmosphere's temperature,
 assumed).
 
+Energy of compression: the work to bring the delivered air from the intake (p_atm, T_atm) to the
+reservoir's pressure p_r, bounded below by the isothermal compression and above by the one-stage
+adiabatic (isentropic) one, per kg::
+
+    w_iso = R T_atm ln(p_r / p_atm),   w_ad = c_p T_atm ((p_r / p_atm)^((gamma - 1) / gamma) - 1)
+
+integrated over what the compressor delivers (a real compressor's shaft work lies between, over
+its efficiency; intercooled stages bring it towards the isothermal bound).
+
 Demand (normal volume flow, DIN 1343: 273.15 K, 101 325 Pa)::
 
     w_d = rho_N Q_N ramp((p - p_atm) / dp_off),   rho_N = 101325 / (R 273.15),
@@ -102,6 +111,15 @@ def governor(running, p_reservoir_Pa, p_cut_in_Pa, p_cut_out_Pa):
     pressure: on at or below cut-in, off at or above cut-out, held in between."""
     running = np.where(p_reservoir_Pa <= p_cut_in_Pa, 1.0, running)
     return np.where(p_reservoir_Pa >= p_cut_out_Pa, 0.0, running)
+
+
+def compression_work_J_per_kg(p_Pa, p_atm_Pa, T_atm_K, gas):
+    """(isothermal, adiabatic) work per kg of air compressed from the atmosphere to ``p_Pa`` [J/kg]
+    (0 at or below the atmosphere's pressure)."""
+    ratio = np.maximum(p_Pa / p_atm_Pa, 1.0)
+    isothermal = gas.R_J_per_kgK * T_atm_K * np.log(ratio)
+    adiabatic = gas.cp_J_per_kgK * T_atm_K * (ratio ** ((gas.gamma - 1.0) / gas.gamma) - 1.0)
+    return isothermal, adiabatic
 
 
 def demand_flow_kg_per_s(w_max_kg_per_s, p_Pa, p_atm_Pa, dp_off_Pa):

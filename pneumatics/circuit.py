@@ -28,6 +28,8 @@ State vector (one column per independent case when batched; see :class:`StateLay
                    state: :meth:`Circuit.update_governors` switches it between steps;
                    absent without compressors)
 ``run_time``       each compressor's cumulative running time [s]
+``compression_work``  each compressor's cumulative energy of compression [J]: isothermal
+                   bounds, then adiabatic bounds
 =================  =========================================================
 
 The groups up to ``enthalpy_in`` sit where they always did: the valve groups are appended, so a

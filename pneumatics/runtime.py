@@ -16,7 +16,7 @@ from typing import Mapping, NamedTuple, Optional
 
 import numpy as np
 
-from .air_supply import demand_flow_kg_per_s, governor
+from .air_supply import compression_work_J_per_kg, demand_flow_kg_per_s, governor
 from .assembly import Assembly
 from .boundary import Supply
 from .chamber import (
@@ -278,6 +278,11 @@ class CircuitRuntime:
         if self._air.n_compressors:
             dx[lay.governor] = 0.0                   # switched between steps (update_governors)
             dx[lay.run_time] = x2[lay.governor]
+            air = self._air
+            atm = self.atmosphere
+            w_iso, w_ad = compression_work_J_per_kg(p[air.reservoir], atm.p_Pa, atm.T_K, self.gas)
+            delivered = w[air.compressor_links]
+            dx[lay.compression_work] = np.concatenate([delivered * w_iso, delivered * w_ad])
         return dx, (m, T, p, mdot, Hdot, chain)
 
     def _write_crushing_rate_terms(self, dx: np.ndarray, x2: np.ndarray, terms, zdot2: np.ndarray) -> None:
@@ -417,6 +422,13 @@ class CircuitRuntime:
     def compressor_run_time_s(self, x) -> np.ndarray:
         """Each compressor's cumulative running time [s], (compressors[, cases])."""
         return x[self.layout.run_time]
+
+    def compression_energy_J(self, x) -> tuple[np.ndarray, np.ndarray]:
+        """Each compressor's cumulative energy of compression [J], (compressors[, cases]): its
+        (isothermal, adiabatic) bounds (:func:`pneumatics.air_supply.compression_work_J_per_kg`)."""
+        work = x[self.layout.compression_work]
+        n = self._air.n_compressors
+        return work[:n], work[n:]
 
     def demand_air_kg(self, x) -> np.ndarray:
         """Cumulative air each demand drew [kg], (demands[, cases])."""

@@ -136,6 +136,14 @@ def _air_from(node: str, sign: float = 1.0) -> Callable[[Sample], np.ndarray]:
     return read
 
 
+def _compression(bound: int) -> Callable[[Sample], np.ndarray]:
+    """The compressors' cumulative energy of compression [J] per case: 0 its isothermal bound, 1
+    its adiabatic one."""
+    def read(sample: Sample) -> np.ndarray:
+        return sample.sim.circuit.compression_energy_J(sample.sim.x)[bound].sum(axis=0)
+    return read
+
+
 #: What every car run samples, in the order of the Dataset and the CSV columns; a kind that needs
 #: more declares its own (:attr:`cosim.kinds.base.CarKind.outputs`), sampled after these, in its runs only.
 OUTPUTS = (
@@ -194,6 +202,9 @@ OUTPUTS = (
            "compressor_air_kg", lambda s: s.sim.circuit.compressor_air_kg(s.sim.x).sum(axis=0), air_supply=True),
     Output("air_demand_kg", (), "kg", "air the other consumers (brakes, doors) drew (cumulative)", "air_demand_kg",
            lambda s: s.sim.circuit.demand_air_kg(s.sim.x).sum(axis=0), air_supply=True),
+    *(Output(f"compression_{bound}_J", (), "J", f"energy of compression, its {bound} bound (cumulative)",
+             f"compression_{bound}_J", _compression(i), air_supply=True)
+      for i, bound in enumerate(("isothermal", "adiabatic"))),
 )
 
 

@@ -64,14 +64,17 @@ def air_columns(case: xr.Dataset) -> Dict[str, float]:
 def air_supply_columns(case: xr.Dataset) -> Dict[str, float]:
     """With a compressor or air demands (:mod:`pneumatics.air_supply`; none without): the air the
     compressor delivered and the demands drew [kg], the compressor's duty cycle (its running time
-    over the run's) and its running minutes per hour of service."""
+    over the run's), its running minutes per hour of service, and the energy of compression of
+    what it delivered, between its isothermal and adiabatic bounds [J]."""
     if "compressor_air_kg" not in case:
         return {}
     t = case["time"].values
     duty = float(case["compressor_run_time_s"].values[-1] / (t[-1] - t[0])) if t[-1] > t[0] else math.nan
     return {"compressor_air_kg": float(case["compressor_air_kg"].values[-1]),
             "air_demand_kg": float(case["air_demand_kg"].values[-1]),
-            "compressor_duty": duty, "compressor_min_per_h": 60.0 * duty}
+            "compressor_duty": duty, "compressor_min_per_h": 60.0 * duty,
+            "compression_isothermal_J": float(case["compression_isothermal_J"].values[-1]),
+            "compression_adiabatic_J": float(case["compression_adiabatic_J"].values[-1])}
 
 
 def fault_figure(scenario: Scenario, ds: xr.Dataset, suffix: str = "", valves_text: str = "") -> List[Figure]:

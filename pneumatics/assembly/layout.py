@@ -72,8 +72,15 @@ class StateLayout:
         return slice(start, start + self.n_compressors)
 
     @cached_property
+    def compression_work(self) -> slice:
+        """Each compressor's cumulative energy of compression [J], its isothermal bound, then each
+        one's adiabatic bound (:func:`pneumatics.air_supply.compression_work_J_per_kg`)."""
+        start = self.run_time.stop
+        return slice(start, start + 2 * self.n_compressors)
+
+    @cached_property
     def size(self) -> int:
-        return self.heat_in + 3 + 2 * self.n_valves + self.n_valve_states + 2 * self.n_compressors
+        return self.heat_in + 3 + 2 * self.n_valves + self.n_valve_states + 4 * self.n_compressors
 
     @cached_property
     def n_dynamic(self) -> int:

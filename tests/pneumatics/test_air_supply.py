@@ -156,3 +156,31 @@ def test_the_adaptive_integrator_refuses_a_governed_circuit():
     circuit = _circuit(0.0)
     with pytest.raises(CircuitError, match="governor"):
         simulate(circuit, circuit.initial_state(), 1.0, _no_motion)
+
+
+def test_the_energy_of_compression_is_the_integral_of_its_bounds_over_the_filling():
+    # an isothermal reservoir filled from 8 bar (below the cut-in: running) without a demand:
+    # p = p0 + (w_c R T / V) t, and with dm = V dp / (R T) the energies are closed forms in p:
+    #   W_iso = V [p ln(p/p_atm) - p]_{p0}^{p},   W_ad = (c_p / R) V [p_atm (p/p_atm)^(k+1) / (k+1) - p]_{p0}^{p}
+    # with k = (gamma - 1) / gamma
+    components = {"supply": Supply(p_Pa=8.0e5, V_m3=V_RESERVOIR_M3),
+                  "compressor": Compressor(free_air_delivery_m3_per_s=FAD_M3_PER_S, p_cut_in_Pa=CUT_IN_PA,
+                                           p_cut_out_Pa=CUT_OUT_PA)}
+    circuit = Circuit(components, atmosphere=ATM, k_W_per_K=math.inf)
+    x0 = circuit.initial_state()
+    x = advance(circuit, x0, 0.0, 5.0, _no_motion, 0.01)
+    assert circuit.compressor_running(x)[0] == 1.0                   # still filling: below the cut-out
+    p0, p = (float(circuit.chamber_states(v, np.zeros(0))[0][0, 0]) for v in (x0, x))
+    pa, V, R, k = ATM.p_Pa, V_RESERVOIR_M3, AIR.R_J_per_kgK, (AIR.gamma - 1.0) / AIR.gamma
+
+    def iso(q):
+        return V * (q * math.log(q / pa) - q)
+
+    def ad(q):
+        return AIR.cp_J_per_kgK / R * V * (pa * (q / pa) ** (k + 1.0) / (k + 1.0) - q)
+
+    W_iso, W_ad = (float(w[0]) for w in circuit.compression_energy_J(x))
+    # RK4 on a smooth integrand over 500 steps: round-off level (1e-9 relative leaves a margin)
+    assert W_iso == pytest.approx(iso(p) - iso(p0), rel=1e-9)
+    assert W_ad == pytest.approx(ad(p) - ad(p0), rel=1e-9)
+    assert W_ad > W_iso > 0.0          # the adiabatic compression costs more than the isothermal one
