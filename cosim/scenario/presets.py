@@ -17,7 +17,7 @@ from typing import Callable, Dict
 import yaml
 
 from pneumatics.presets import CIRCUIT_PRESETS
-from vehicle.params import VehicleParams, cooperrider_bogie, metro_car_arb_dampers
+from vehicle.params import VehicleParams, cooperrider_bogie, manchester_vehicle_1, metro_car_arb_dampers
 
 
 def paper_metro_car() -> VehicleParams:
@@ -30,7 +30,7 @@ def paper_metro_car() -> VehicleParams:
 #: preset name -> function returning the VehicleParams
 VEHICLE_PRESETS: Dict[str, Callable[[], VehicleParams]] = {
     "paper_metro_car": paper_metro_car, "metro_car_arb_dampers": metro_car_arb_dampers,
-    "cooperrider": cooperrider_bogie}
+    "cooperrider": cooperrider_bogie, "manchester_vehicle_1": manchester_vehicle_1}
 PRESETS = {**{name: ("vehicle", fn) for name, fn in VEHICLE_PRESETS.items()},
            **{name: ("circuit", fn) for name, fn in CIRCUIT_PRESETS.items()}}
 

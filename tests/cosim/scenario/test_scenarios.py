@@ -175,7 +175,7 @@ def test_inconsistent_car_parameters_are_bad_input(tmp_path):
     assert err.path == "vehicle" and "airspring_upper_height_m" in err.reason
 
 
-@pytest.mark.parametrize("name", ["paper_metro_car", "metro_car_arb_dampers"])
+@pytest.mark.parametrize("name", ["paper_metro_car", "metro_car_arb_dampers", "manchester_vehicle_1"])
 def test_a_printed_vehicle_preset_loads_back_as_the_preset(tmp_path, name):
     # pneumorail presets NAME > car.yaml gives a file that is the preset, field by field (exact:
     # the YAML holds the literals)
