@@ -547,8 +547,9 @@ def cooperrider_bogie() -> VehicleParams:
 def manchester_vehicle_1() -> VehicleParams:
     """Manchester benchmark vehicle 1, the passenger vehicle of Iwnicki's "The Manchester
     Benchmarks for Rail Vehicle Simulation" (Vehicle System Dynamics 30 (1998) 295-313), as far as
-    its parameters could be read here (sources named per field, inferred values marked). The paper and the book were not readable; every value below is
-    from a public file that states it is the benchmark's, and the ones no file gives are inferred
+    its parameters could be read here (sources named per field, inferred values marked). The paper
+    and the book were not readable; every value below is from a public file that states it is the
+    benchmark's, and the ones no file gives are inferred
     (marked, with the reasoning). docs/validation.md, "Manchester benchmark vehicle 1", has the
     table with each source and what is missing. Sources:
 
