@@ -148,7 +148,8 @@ def test_fmpy_reproduces_pneumorails_own_integration(fmu, simulated):
     at the same steps. What may differ is the last bit of FMPy's time grid (n * step against
     t0 + step) in its input lookup, ~1e-16 relative, carried through 100 steps of a stable
     circuit: 1e-9 relative leaves six orders of margin and still catches any real difference
-    (one sub-step more or less, a linear instead of quadratic extrapolation: 1e-4 and more)."""
+    (one sub-step more or less, a linear instead of quadratic extrapolation: 1e-4 and more).
+    Measured: identical to the last bit."""
     spec = _spec(fmu)
     reference = _reference(spec, extrapolate=True)
     assert simulated.shape == reference.shape
