@@ -39,6 +39,15 @@ UNITS = {
 }
 
 
+def _installed_version() -> str:
+    """pneumorail's version in the Python the slave runs in (as the export records it)."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("pneumorail")
+    except PackageNotFoundError:
+        return "not installed"
+
+
 def extrapolation_acceleration(zdot_m_per_s: np.ndarray, t_s: float, previous) -> np.ndarray:
     """The crushing's acceleration [m/s^2] the FMU extrapolates with from ``t_s`` on: the change of
     the sampled rate since the previous communication point ``previous`` = (t, zdot) over the time
@@ -74,6 +83,10 @@ class PneumorailCircuit(Fmi2Slave):
         super().__init__(**kwargs)
         with open(Path(self.resources) / SPEC_FILE, "rb") as f:
             spec = pickle.load(f)     # written by pneumorail's own export into this very FMU
+        installed = _installed_version()
+        if installed != spec["pneumorail_version"]:
+            raise RuntimeError(f"this FMU was exported by pneumorail {spec['pneumorail_version']}; the Python it runs "
+                               f"in has pneumorail {installed}: install the same version (docs/fmi.md)")
         self.spec = spec
         self.author = "pneumorail"
         self.version = spec["pneumorail_version"]

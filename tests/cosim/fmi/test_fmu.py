@@ -193,3 +193,44 @@ def test_an_isothermal_fmu_runs_at_k_infinity(tmp_path):
     md = fmpy.read_model_description(str(path), validate=True)
     v = {var.name: var for var in md.modelVariables}
     assert v["isothermal"].start == "true" and float(v["k_W_per_K"].start) == 0.0
+
+
+def _slave(fmu, tmp_path, **changes):
+    """The FMU's slave class run in this process, on the FMU's own resources (``changes``: to its spec)."""
+    from cosim.fmi.slave import SPEC_FILE, PneumorailCircuit
+    resources = tmp_path / "resources"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(tmp_path)
+    spec = pickle.loads((resources / SPEC_FILE).read_bytes())
+    (resources / SPEC_FILE).write_bytes(pickle.dumps({**spec, **changes}))
+    return PneumorailCircuit(instance_name="test", resources=str(resources)), spec
+
+
+def test_variable_communication_steps_extrapolate_over_the_step_they_span(fmu, tmp_path):
+    """Steps of 10 and 4 ms in turn (canHandleVariableCommunicationStepSize): each step's
+    acceleration is the change of rate over the previous step's length; the result is
+    pneumorail's own integration of the same extrapolation, to the last bit."""
+    slave, spec = _slave(fmu, tmp_path)
+    slave.exit_initialization_mode()
+    circuit = Circuit(spec["components"], k_W_per_K=K_W_PER_K)
+    x = circuit.initial_state(pressures_at_rest(spec["components"], spec["p0_Pa"]))
+    w = 2 * np.pi * FREQUENCY_HZ
+    t, previous = 0.0, None
+    for h in [0.01, 0.004] * 10:
+        z0, zd0 = np.zeros(4), np.zeros(4)
+        z0[0], zd0[0] = AMPLITUDE_M * math.sin(w * t), AMPLITUDE_M * w * math.cos(w * t)
+        slave.z_m[:], slave.zdot_m_per_s[:] = z0.tolist(), zd0.tolist()
+        slave.do_step(t, h)
+        a = np.zeros(4) if previous is None else (zd0 - previous[1]) / (t - previous[0])
+        x = advance(circuit, x, t, t + h, lambda s, t0=t, z0=z0, zd0=zd0, a=a: (z0 + (s - t0) * (zd0 + 0.5 * (s - t0) * a),
+                                                                                  zd0 + (s - t0) * a),
+                    spec["pneumatic_step_s"])
+        previous, t = (t, zd0), t + h
+        force = circuit.bellow_forces_N(x, z0 + h * (zd0 + 0.5 * h * a))
+        assert slave.F_N == force.tolist()
+    assert slave.z_m[0] == AMPLITUDE_M * math.sin(w * (t - 0.004))      # the inputs stay as they were set
+
+
+def test_an_fmu_of_another_pneumorail_version_says_so(fmu, tmp_path):
+    with pytest.raises(RuntimeError, match="exported by pneumorail 0.0.1; .* install the same version"):
+        _slave(fmu, tmp_path, pneumorail_version="0.0.1")
