@@ -56,7 +56,6 @@ def circuit_spec(scenario: Scenario, k_W_per_K: Optional[float]) -> dict:
     car = kind.make_car(scenario)
     p0 = static_pressures(components, car.static_bellow_forces_N(), circuit.atmosphere.p_Pa)
     h = stable_step_s(circuit, circuit.initial_state(p0), scenario.solver.pneumatic_step_s)
-    text = scenario.file.read_bytes() if isinstance(scenario.file, Path) and scenario.file.is_file() else b""
     isothermal = math.isinf(k_W_per_K)
     spec = {
         "components": components,
@@ -67,7 +66,7 @@ def circuit_spec(scenario: Scenario, k_W_per_K: Optional[float]) -> dict:
         "pneumatic_step_s": float(h),
         "scenario_name": scenario.name,
         "scenario_file": Path(scenario.file).name,
-        "scenario_sha256": hashlib.sha256(text).hexdigest(),
+        "scenario_sha256": hashlib.sha256(Path(scenario.file).read_bytes()).hexdigest(),
         "pneumorail_version": _version(),
         "default_experiment": (0.0, DEFAULT_STOP_S, float(scenario.solver.macro_step_s)),
     }

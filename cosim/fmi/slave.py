@@ -109,6 +109,7 @@ class PneumorailCircuit(Fmi2Slave):
         self._circuit = None
         self._x = None
         self._previous_rate = None
+        self._h = self.pneumatic_step_s
 
         def indexed(values, i):
             return (lambda: values[i]), (lambda v: values.__setitem__(i, float(v)))
@@ -147,7 +148,8 @@ class PneumorailCircuit(Fmi2Slave):
                                                    "temperature (k_W_per_K is then ignored)"))
         self.register_variable(UnitReal("pneumatic_step_s", "s", causality=Fmi2Causality.parameter,
                                         variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
-                                        description="longest RK4 step of the air within a communication step"))
+                                        description="longest RK4 step of the air within a communication step (shortened at "
+                                                    "initialisation if k needs it: pneumatics.integrate.stable_step_s)"))
 
     # -- the model description: units and the scenario it came from ---------------------------------
 
@@ -174,11 +176,14 @@ class PneumorailCircuit(Fmi2Slave):
 
     def exit_initialization_mode(self):
         from pneumatics.circuit import Circuit
+        from pneumatics.integrate import stable_step_s
         from pneumatics.layouts import pressures_at_rest
         components = self.spec["components"]
         k = math.inf if self.isothermal else self.k_W_per_K
         self._circuit = Circuit(components, k_W_per_K=k)
         self._x = self._circuit.initial_state(pressures_at_rest(components, dict(zip(self.bellows, self.p0_Pa))))
+        # k may have been raised since the export: its thermal rate may need a shorter step
+        self._h = stable_step_s(self._circuit, self._x, self.pneumatic_step_s)
         self._sample(np.array(self.z_m))
 
     def do_step(self, current_time: float, step_size: float) -> bool:
@@ -187,7 +192,7 @@ class PneumorailCircuit(Fmi2Slave):
         z0, zd0 = np.array(self.z_m), np.array(self.zdot_m_per_s)
         a = extrapolation_acceleration(zd0, t0, self._previous_rate)
         self._x = advance(self._circuit, self._x, t0, t0 + step_size,
-                          lambda t: (z0 + (t - t0) * (zd0 + 0.5 * (t - t0) * a), zd0 + (t - t0) * a), self.pneumatic_step_s)
+                          lambda t: (z0 + (t - t0) * (zd0 + 0.5 * (t - t0) * a), zd0 + (t - t0) * a), self._h)
         self._previous_rate = (t0, zd0)
         self._sample(z0 + step_size * (zd0 + 0.5 * step_size * a))
         return True

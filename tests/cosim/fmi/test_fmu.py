@@ -61,7 +61,7 @@ def test_the_model_description_is_valid_and_says_what_each_variable_is(fmu):
     spec = _spec(fmu)
     assert float(v["bellow_FL.p0_Pa"].start) == spec["p0_Pa"]["FL"] > 1e5      # the car at rest, computed at export
     assert all(var.description for var in md.modelVariables)
-    assert md.defaultExperiment.stepSize == str(STEP_S) or float(md.defaultExperiment.stepSize) == STEP_S
+    assert (float(md.defaultExperiment.stopTime), float(md.defaultExperiment.stepSize)) == (10.0, STEP_S)
     sha = hashlib.sha256(SCENARIO.read_bytes()).hexdigest()
     assert sha in md.description and "twist_dqq.yaml" in md.description and md.version == spec["pneumorail_version"]
     caps = md.coSimulation
@@ -234,3 +234,14 @@ def test_variable_communication_steps_extrapolate_over_the_step_they_span(fmu, t
 def test_an_fmu_of_another_pneumorail_version_says_so(fmu, tmp_path):
     with pytest.raises(RuntimeError, match="exported by pneumorail 0.0.1; .* install the same version"):
         _slave(fmu, tmp_path, pneumorail_version="0.0.1")
+
+
+def test_a_k_raised_by_the_importer_shortens_the_pneumatic_step(fmu, tmp_path):
+    """RK4 is stable for h < 2.78 m c_v / k: the step written at export (k = 10) would not do for
+    k = 1e5 W/K, so initialisation shortens it as a car run would (stable_step_s)."""
+    slave, spec = _slave(fmu, tmp_path)
+    slave.k_W_per_K = 1e5
+    slave.exit_initialization_mode()
+    assert slave._h < spec["pneumatic_step_s"] / 10
+    slave.do_step(0.0, 0.01)
+    assert np.isfinite(slave.F_N).all()
