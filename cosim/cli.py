@@ -78,6 +78,7 @@ examples:
   pneumorail sweep scenarios/curve_entry.yaml --grid curve.speed_m_per_s=8,10,12 --k 0,inf
   pneumorail compare results/twist_dqq results/twist_dqq_1a2b3c4d --wheels 1L,3R
   pneumorail report results/curve_canted --out curve_canted.html    # one HTML file to hand on
+  pneumorail fmu scenarios/twist_dqq.yaml --k 10 --out twist_dqq.fmu   # the air circuit for another tool
   pneumorail comfort results/straight_irregular/timeseries/curve_valves=off_k=inf.csv --point centre
 
 every scenario key: docs/scenario_keys.md; the models: docs/models.md
@@ -159,6 +160,13 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--jobs", type=int, default=2, help="processes: a stiffness table's frequencies, the profiles of "
                                                        "a fit of several keys (default 2)")
     i.add_argument("--dask", action="store_true", help="profiles on a Dask LocalCluster of --jobs workers")
+    f = sub.add_parser("fmu", help="export the scenario's air circuit as an FMI 2.0 co-simulation FMU (docs/fmi.md)")
+    f.add_argument("scenario", type=Path, help="car scenario YAML file")
+    f.add_argument("--out", type=Path, required=True, help="the FMU file to write (NAME.fmu)")
+    f.add_argument("--k", type=_k_list, default=None,
+                   help="k [W/K] the FMU starts with (its parameter k_W_per_K); default: the scenario's one k")
+    f.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scenario value (repeatable)")
     o = sub.add_parser("report", help="one self-contained HTML report of one or more runs (side by side)")
     o.add_argument("dirs", type=Path, nargs="+", help="output folders of runs, checks or verify")
     o.add_argument("--out", type=Path, default=None, help="the HTML file (default: report.html in the first folder)")
@@ -208,6 +216,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return _verify(args)
         if args.command == "sweep":
             return _sweep(args)
+        if args.command == "fmu":
+            return _fmu(args)
         return _run(args)
     except ScenarioError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -396,6 +406,16 @@ def _verify(args) -> int:
         print(f"DIVERGED: {diverged}")
         return EXIT_FAILED
     return EXIT_OK if all(e.error <= scenario.verify.tolerance for e in found) else EXIT_FAILED
+
+
+def _fmu(args) -> int:
+    from cosim.fmi.export import export_fmu
+    if args.k is not None and len(args.k) != 1:
+        raise ScenarioError(args.scenario, ["--k"], f"expected one k value, got {len(args.k)}")
+    scenario = _load(args)
+    path = export_fmu(scenario, args.out, args.k[0] if args.k else None)
+    print(f"FMU in {path}")
+    return EXIT_OK
 
 
 def _comfort(args) -> int:

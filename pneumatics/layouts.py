@@ -58,10 +58,15 @@ def car_circuit(bellow: Bellow, tank: Optional[Tank], pipe: Pipe, *, levelling: 
 
 
 def static_pressures(components: Dict[str, object], F0_N: Sequence[float], p_atm_Pa: float) -> Dict[str, float]:
-    """Bellow pressures that carry the static load, eq. (4) solved for p at z = 0; a chamber with no
-    initial pressure of its own that a pipe or an orifice (a throttle) joins to a bellow (its
-    auxiliary tank) starts at that bellow's pressure, so the circuit starts at rest."""
-    p0 = {b: p_atm_Pa + F / components[b].area_m2(0.0) for b, F in zip(BELLOWS, F0_N)}
+    """Bellow pressures that carry the static load, eq. (4) solved for p at z = 0, and the chambers
+    that follow them (:func:`pressures_at_rest`), so the circuit starts at rest."""
+    return pressures_at_rest(components, {b: p_atm_Pa + F / components[b].area_m2(0.0) for b, F in zip(BELLOWS, F0_N)})
+
+
+def pressures_at_rest(components: Dict[str, object], bellow_p0_Pa: Dict[str, float]) -> Dict[str, float]:
+    """The bellows' pressures ``bellow_p0_Pa`` and, for a chamber with no initial pressure of its own
+    that a pipe or an orifice (a throttle) joins to a bellow (its auxiliary tank), that bellow's."""
+    p0 = dict(bellow_p0_Pa)
     for c in components.values():
         if isinstance(c, (Pipe, Orifice)):
             for bellow, other in ((c.a, c.b), (c.b, c.a)):

@@ -14,7 +14,7 @@ from helpers import ROOT
 #: the rooms of cosim/, each importing only from those before it (or itself); ``load``, ``runner``
 #: and ``keyref`` are the entry points above the kinds, ``cli`` the top
 LAYERS = (("errors", "interrupts"), ("scenario",), ("limits",), ("stability",), ("results",), ("engine",), ("runs",), ("kinds",),
-          ("load", "runner", "keyref"), ("verification", "sweep", "identify"), ("cli",))
+          ("load", "runner", "keyref"), ("verification", "sweep", "identify", "fmi"), ("cli",))
 RANK = {room: i for i, rooms in enumerate(LAYERS) for room in rooms}
 
 
