@@ -8,7 +8,7 @@ import logging
 import time
 from contextlib import contextmanager
 from pathlib import Path
-from typing import List, Optional
+from typing import Dict, List, Optional
 
 from cosim.interrupts import stop_requested
 from cosim.kinds import KINDS
@@ -23,16 +23,17 @@ def run(scenario: Scenario, progress: Optional[Progress] = None) -> Outcome:
     """Run ``scenario`` and return its :class:`Outcome` (nothing is written), built here once from
     what its kind computed (:class:`~cosim.results.outcome.Computed`): the wall time, the totals
     and checkable metrics of the cases (:meth:`~cosim.kinds.base.Kind.totals`,
-    :meth:`~cosim.kinds.base.Kind.case_metrics`), what failed on every row with faults, and every
-    row's validity flags (:mod:`cosim.limits.validity`). Every warning of the run is in
-    ``outcome.warnings`` (run.json) and logged once: a kind that only kept one has it logged here."""
+    :meth:`~cosim.kinds.base.Kind.case_metrics`), on every row what failed and what the floor
+    carries (``faults``, ``payload``), and every row's validity flags (:mod:`cosim.limits.validity`).
+    Every warning of the run is in ``outcome.warnings`` (run.json) and logged once: a kind that only
+    kept one has it logged here."""
     kind = KINDS[scenario.kind]
     t0 = time.perf_counter()
     with _logged_warnings() as logged:
         computed = kind.run(scenario, progress or Progress(scenario.name, quiet=True))
     wall_s = time.perf_counter() - t0
-    faults = _faults_label(scenario)
-    rows = [{**row, "faults": faults} for row in computed.rows] if faults else list(computed.rows)  # what failed
+    labels = _labels(scenario)
+    rows = [{**row, **labels} for row in computed.rows]   # what failed, what the floor carries
     cases = computed.cases
     if cases is None:
         cases = [c for c in map(kind.case_metrics, computed.rows) if c is not None]
@@ -74,13 +75,16 @@ def run_scenario(scenario: Scenario, out_dir: Path, progress: Progress) -> Outco
     kind = KINDS[scenario.kind]
     outcome = run(scenario, progress)
     figures = kind.figures(outcome)
-    faults = _faults_label(scenario)
-    for figure in figures if faults else ():     # every figure says what failed
-        figure.title = f"{figure.title or ''}\nfaults: {faults}".lstrip("\n")
+    labels = _labels(scenario)
+    for figure in figures if labels else ():    # every figure says what failed and what the floor carries
+        figure.title = "\n".join([figure.title or "", *(f"{name}: {text}" for name, text in labels.items())]).lstrip("\n")
     write_outcome(outcome, out_dir, figures, scenario.solver.jobs if kind.car else 1)
     return outcome
 
 
-def _faults_label(scenario: Scenario) -> str:
-    """The scenario's faults in words; empty without faults (or for a rig)."""
-    return scenario.circuit.faults_label()
+def _labels(scenario: Scenario) -> Dict[str, str]:
+    """What a run carries besides the intact car at its tare, in words, by summary column: its
+    ``faults`` and its ``payload`` (at arrival and what boards or alights); none without them (or
+    for a rig)."""
+    payload = scenario.payload.label() if scenario.payload is not None else ""
+    return {name: text for name, text in (("faults", scenario.circuit.faults_label()), ("payload", payload)) if text}

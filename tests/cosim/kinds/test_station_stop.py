@@ -78,5 +78,6 @@ def test_a_payload_step_ends_at_the_static_balance():
     held_end = sum(p_hand * (circuit.bellow.volume_m3(z) + V_tank) for z in z_end) / (R * T)
     held_arrival = 4.0 * p_arrival * (circuit.bellow.volume_m3(0.0) + V_tank) / (R * T)
     row = outcome.rows[0]
+    assert row["payload"] == payload.label() and "kg at arrival" in row["payload"]     # every row says what it carries
     assert row["air_injected_kg"] - row["air_exhausted_kg"] == pytest.approx(held_end - held_arrival, rel=5e-3)
     assert row["payload_end_kg"] == pytest.approx(payload.normal_payload_kg)
