@@ -115,7 +115,8 @@ class VehicleParams:
     floor_height_m: float = field(default=1.1, metadata=_HEIGHT)
 
     # --- centres of gravity above rail top at static equilibrium ---
-    # Low-floor-ish metro carbody (floor ~1.1 m, roof ~3.6 m): CoG ~1.5 m (Manchester: 2.0 m).
+    # Low-floor-ish metro carbody (floor ~1.1 m, roof ~3.6 m): CoG ~1.5 m (Manchester vehicle 1: 1.8 m
+    # in the one public set that gives it, manchester_vehicle_1()).
     carbody_cog_height_m: float = field(default=1.5, metadata=_HEIGHT)
     # Bogie frame CoG between axle height (0.42 m) and airspring seat (0.8 m).
     bogie_cog_height_m: float = field(default=0.6, metadata=_HEIGHT)
