@@ -219,8 +219,10 @@ def summary_row(case: xr.Dataset, curve: CurveTest) -> Dict[str, object]:
     row = {"valves": bool(case["valves"]), "k_W_per_K": float(case["k_W_per_K"]),
            "roll_max_rad": float(np.abs(roll).max()),
            "roll_mean_end_rad": float(window_mean(t, roll, curve.window))}
+    # the air exchanged, and with a compressor or demands their air, duty and energy (the mass
+    # balance's error takes its place at the end of the row)
     air = air_columns(case)
-    row.update({name: air[name] for name in ("air_injected_kg", "air_exhausted_kg", "air_lost_kg")})
+    row.update({name: value for name, value in air.items() if name != "mass_balance_error_kg"})
     z = window_mean(t, case["crushing_m"].transpose("time", "bellow").values, curve.window)
     row.update({f"z_mean_end_{b}_m": float(z[i]) for i, b in enumerate(BELLOWS)})
     duration = float(t[-1] - t[0])

@@ -51,3 +51,14 @@ def test_a_twist_run_with_a_compressor_accounts_for_every_gram():
         if not row["valves"]:
             assert row["air_injected_kg"] == 0.0       # the suspension took nothing from the reservoir
     assert not any(math.isnan(v) for r in outcome.rows for v in (r["compressor_duty"], r["air_demand_kg"]))
+
+
+@pytest.mark.slow
+def test_a_curve_run_reports_its_air_supply_too():
+    # the track run's summary row (curve, ride) carries the compressor's columns as the twist's does
+    scenario = load_scenario(SCENARIOS / "curve_entry.yaml", [*AIR_SUPPLY, "solver.jobs=1", "curve.duration_s=12",
+                                                             "curve.valve_settings=[true]"], [math.inf])
+    row = run(scenario).rows[0]
+    assert row["compressor_air_kg"] > 0.0 and 0.0 < row["compressor_duty"] < 1.0
+    assert 0.0 < row["compression_isothermal_J"] < row["compression_adiabatic_J"]
+    assert abs(row["mass_balance_error_kg"]) < 1e-10
