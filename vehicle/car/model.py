@@ -83,6 +83,12 @@ class MetroCar:
             and deceleration, ``(hold_s, deceleration_m_per_s2)``: the car keeps v for hold_s, then
             slows down at that rate (the drive, the track frames and the creepages follow v(t));
             None = constant speed.
+        speed_profile: kinematic guidance only: a :class:`~vehicle.speed.PhasedSpeedProfile`, phases
+            of constant acceleration that may stop and start (a train in service); the wheelsets'
+            guidance points run at its s(t), so the longitudinal inertia loads reach the car
+            through the guidance joints at the axle centres (no traction or braking through the
+            wheel-rail contact: the cheaper longitudinal model). ``speed_m_per_s`` must be its
+            speed at t = 0. None = constant speed.
         start_s_m: arc length [m] of the car centre (midway between the bogie centres) at
             t = 0. Default: the rear wheelset at s = 0 on a ``track``, 0 without one.
         spectral_radius: generalized-alpha spectral radius at infinite frequency, 0 <= rho <= 1

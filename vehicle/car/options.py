@@ -14,6 +14,7 @@ import numpy as np
 from ..params import SPECTRAL_RADIUS, ContactParams, TrackStructure
 from ..payload import PayloadBlock
 from ..track import TrackGeometry
+from ..speed import PhasedSpeedProfile
 
 #: Newton's relative tolerance with contact guidance. A step's initial residual is ~M a
 #: there (~30 kN in the paper's curve) against ~700 kN with kinematic guidance, where the
@@ -83,6 +84,7 @@ class RunSettings:
     speed_m_per_s: float = 0.0
     start_s_m: float | None = None
     deceleration: tuple[float, float] | None = None
+    speed_profile: PhasedSpeedProfile | None = None
     rail_height_m: Callable[[float], np.ndarray] | None = None
     irregularity: Callable[[np.ndarray], tuple] | None = None
     payload: Callable[[float], Sequence[PayloadBlock]] | None = None
@@ -95,6 +97,14 @@ class RunSettings:
                              "vertical_m, cross_level_m, gauge_m)")
         if not math.isfinite(self.speed_m_per_s):
             raise ValueError(f"speed_m_per_s must be finite, got {self.speed_m_per_s!r}")
+        if self.speed_profile is not None:
+            if self.deceleration is not None:
+                raise ValueError("give a speed_profile or a deceleration, not both")
+            if not isinstance(self.speed_profile, PhasedSpeedProfile):
+                raise ValueError("speed_profile must be a vehicle.speed.PhasedSpeedProfile")
+            if self.speed_m_per_s != self.speed_profile.v0_m_per_s:
+                raise ValueError(f"speed_m_per_s ({self.speed_m_per_s!r}) must be the speed_profile's speed at t = 0 "
+                                 f"({self.speed_profile.v0_m_per_s!r}): every body starts at it")
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..guidance import TrackSampler, shared_sampler
-from ..speed import SpeedProfile
+from ..speed import PhasedSpeedProfile, SpeedProfile
 from ..track import TrackGeometry
 from .options import RunSettings
 
@@ -33,8 +33,9 @@ class CarPath:
     canted: bool
     #: the guidance follows the track (a track, or a running car along x)
     guided: bool
-    #: the speed over time (:class:`~vehicle.speed.SpeedProfile`)
-    speed_profile: SpeedProfile
+    #: the speed over time (:class:`~vehicle.speed.SpeedProfile` or
+    #: :class:`~vehicle.speed.PhasedSpeedProfile`)
+    speed_profile: SpeedProfile | PhasedSpeedProfile
 
     @classmethod
     def plan(cls, run: RunSettings, wheelset_x_m: np.ndarray, contact_guidance: bool) -> CarPath:
@@ -47,15 +48,18 @@ class CarPath:
         if not math.isfinite(start_s):
             raise ValueError(f"start_s_m must be finite, got {start_s!r}")
         s0 = start_s + wheelset_x_m
-        sampler, canted, guided = None, False, v != 0.0
+        sampler, canted, guided = None, False, v != 0.0 or run.speed_profile is not None
         if track is not None:
             _check_start(track, s0)
             sampler, guided = shared_sampler(track), True
             canted = any(getattr(seg, "cant_rad", 0.0) != 0.0 for seg in track.segments)
-        profile = SpeedProfile(float(max(run.speed_m_per_s, 0.0)), *(run.deceleration or (0.0, 0.0)))
+        profile = run.speed_profile or SpeedProfile(float(max(run.speed_m_per_s, 0.0)), *(run.deceleration or (0.0, 0.0)))
         if run.deceleration is not None and not contact_guidance:
             raise ValueError("deceleration needs guidance='contact' (the kinematic guidance prescribes a "
-                             "constant speed)")
+                             "constant speed or a speed_profile)")
+        if run.speed_profile is not None and contact_guidance:
+            raise ValueError("a speed_profile needs guidance='kinematic': it stops and starts, and the contact "
+                             "guidance's creepages are relative to v > 0")
         return cls(track, v, start_s, s0, start_s, sampler, canted, guided, profile)
 
     def distance_m(self, t):
@@ -79,7 +83,7 @@ class CarPath:
         decelerating car: the time its speed reaches zero at most)."""
         if not self.speed_profile.constant:
             if self.track is None:
-                return self.speed_profile.end_s
+                return self.speed_profile.usable_until_s
             return self.speed_profile.time_at_distance(self.track.total_length_m - self.wheelset_s0_m[0])
         v = self.speed_m_per_s
         if self.track is None or v == 0.0:
