@@ -17,7 +17,7 @@ from cosim.scenario.model import (
     VerifySettings,
 )
 from cosim.scenario.payload import PayloadSettings
-from cosim.scenario.schema import _type_name, range_of
+from cosim.scenario.schema import _type_name, is_key, range_of
 from pneumatics.air_supply import AirDemand, Compressor
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
@@ -70,7 +70,7 @@ def kind_sections():
     for kind in KINDS.values():
         out.append((kind.section, kind.experiment, f"kind: {kind.name}"))
         hints = typing.get_type_hints(kind.experiment)
-        for f in dataclasses.fields(kind.experiment):
+        for f in filter(is_key, dataclasses.fields(kind.experiment)):
             nested = [t for t in (hints[f.name], *typing.get_args(hints[f.name])) if dataclasses.is_dataclass(t)]
             if nested:
                 optional = type(None) in typing.get_args(hints[f.name])
@@ -132,7 +132,7 @@ def section(key: str, cls, note: str) -> str:
     doc = inspect.cleandoc(cls.__doc__ or "").split("\n\n")[0].replace("\n", " ")
     lines = [f"## `{key}` ({cls.__name__})", "", f"{note}. {doc}", "", "| key | type | default | allowed |",
              "| --- | --- | --- | --- |"]
-    for f in dataclasses.fields(cls):
+    for f in filter(is_key, dataclasses.fields(cls)):
         lines.append(f"| `{f.name}` | {_type_name(hints[f.name])} | {_default(f)} | {_allowed(cls, f.name, hints[f.name])} |")
     return "\n".join(lines) + "\n"
 

@@ -179,6 +179,7 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
     if refused:
         raise ScenarioError(path, ["payload"], refused)
     payload = parse_payload(data.get("payload"), path, shortest)
+    experiment = kind.with_payload(experiment, payload, path)
     if payload is not None:       # the car starts carrying its payload at arrival: the bellows' pressures follow
         car = _check_car_builds(vehicle, data.get("vehicle"), path, payload)
     air = check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)

@@ -9,6 +9,7 @@ is checked and run, what it draws, its metrics and what ``compare`` overlays), a
 * :mod:`cosim.kinds.ride`: ride comfort on irregular track at a list of speeds: ``ride``;
 * :mod:`cosim.kinds.stability`: linear running stability (eigenvalues, critical speed): ``stability``;
 * :mod:`cosim.kinds.station_stop`: passengers boarding at a platform, the floor re-levelled: ``station_stop``;
+* :mod:`cosim.kinds.service`: a line in service, stations, passengers and curves: ``service``;
 
 The kinds compose the runs of :mod:`cosim.runs` (what every car run shares: wheel unloading, air
 accounts, faults; the run of the car along a track: its spec, simulation, summary row and figures
@@ -24,12 +25,12 @@ from __future__ import annotations
 
 from typing import Callable, Dict
 
-from cosim.kinds import curve_entry, ride, rig, stability, station_stop, twist
+from cosim.kinds import curve_entry, ride, rig, service, stability, station_stop, twist
 from cosim.kinds.base import Kind
 
 #: kind name (``kind:`` in a scenario) -> its declaration
 KINDS: Dict[str, Kind] = {k.name: k for k in (*rig.KINDS, twist.KIND, curve_entry.KIND, ride.KIND, stability.KIND,
-                                              station_stop.KIND)}
+                                              station_stop.KIND, service.KIND)}
 
 
 def overlays() -> Dict[str, Callable]:

@@ -181,6 +181,13 @@ class CarKind(Kind):
         ``scenario.car_payload`` to the car)."""
         return None
 
+    def with_payload(self, experiment: Any, payload: Any, path: Path) -> Any:
+        """The experiment once the scenario's ``payload:`` is read (``payload``: its
+        :class:`~cosim.scenario.payload.PayloadSchedule`, None without one): what the kind needs of it,
+        checked (default: the experiment unchanged). A service takes its reference masses and
+        the load on board at the start, and checks the load at every stop."""
+        return experiment
+
     @abstractmethod
     def make_car(self, scenario: "Scenario"):
         """The car of a run, with the :class:`vehicle.car.MetroCar` interface (a bound method of

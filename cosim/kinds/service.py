@@ -44,10 +44,10 @@ from cosim.runs.track_run import plane_roll_rad
 from cosim.runs.track_spec import CANT, MAX_TRACK_LENGTH_M, RADIUS, SPEED, TRANSITION
 from cosim.scenario.model import Scenario
 from cosim.scenario.payload import PayloadSettings
-from cosim.scenario.schema import build, check_valve_settings, describe, k_label
+from cosim.scenario.schema import build, check_keys, check_valve_settings, describe, is_key, k_label, set_at_load
 from pneumatics.air_supply import normal_density_kg_per_m3
 from pneumorail.quantities import plausible, ranged
-from vehicle.params import FLOOR_POINTS, VehicleParams
+from vehicle.params import VehicleParams
 from vehicle.track import TRANSITION_SHAPES
 
 SIDES = ("left", "right")
@@ -112,9 +112,10 @@ class Service(Doors):
     spread_s: float = field(default=15.0, metadata=plausible(0.0, 600.0, "s", low_inclusive=False))
     valve_settings: Optional[Tuple[bool, ...]] = None
     # set at load, not keys: the car's half length (centre to front wheelset) and the payload's settings
-    car_half_length_m: float = field(default=6.0, metadata=plausible(0.5, 30.0, "m", "a car's centre to its front wheelset"))
-    payload_settings: PayloadSettings = PayloadSettings()
-    initial_kg: float = field(default=0.0, metadata=plausible(0.0, 1e5, "kg", "a car's payload"))
+    car_half_length_m: float = field(default=6.0, metadata=set_at_load(plausible(0.5, 30.0, "m",
+                                                                                  "a car's centre to its front wheelset")))
+    payload_settings: PayloadSettings = field(default=PayloadSettings(), metadata=set_at_load())
+    initial_kg: float = field(default=0.0, metadata=set_at_load(plausible(0.0, 1e5, "kg", "a car's payload")))
 
     @property
     def plan(self) -> Plan:
@@ -151,6 +152,7 @@ def parse(data, vehicle: VehicleParams, path: Path) -> Service:
     if not isinstance(data, dict):
         raise ScenarioError(path, ["service"], f"expected a mapping (stations, curves, line_speed_m_per_s, ...), got "
                                                f"{describe(data)}")
+    check_keys(data, [f.name for f in dataclasses.fields(Service) if is_key(f)], path, ["service"])
     stations, curves = _items(data, "stations", StationSpec, path), _items(data, "curves", CurveSpec, path)
     half = 0.5 * (vehicle.bogie_centre_distance_m + vehicle.wheelbase_m)
     rest = {k: v for k, v in data.items() if k not in ("stations", "curves")}
@@ -168,8 +170,9 @@ def parse(data, vehicle: VehicleParams, path: Path) -> Service:
         if st.platform_side not in SIDES:
             raise ScenarioError(path, [*where, "platform_side"], f"expected left or right, got {st.platform_side!r}")
         if i and not st.at_m - stations[i - 1].at_m >= 2.0 * half:
+            before = stations[i - 1].at_m
             raise ScenarioError(path, [*where, "at_m"], f"expected stations in order along the line, each at least a "
-                                                        f"car ({2 * half:g} m) beyond the one before ({stations[i - 1].at_m:g} m); "
+                                                        f"car ({2 * half:g} m) beyond the one before ({before:g} m); "
                                                         f"got {st.at_m:g} m")
         if not st.dwell_s > service.door_open_delay_s + service.door_close_s:
             raise ScenarioError(path, [*where, "dwell_s"], f"the doors open {service.door_open_delay_s:g} s after the stop "
@@ -286,7 +289,7 @@ def stop_rows(case: xr.Dataset, service: Service) -> List[Dict[str, object]]:
         dz = sides[stop.platform_side] - sides[stop.platform_side][0]
         i_arr, i_open, i_close, i_dep = (_at(t, x) for x in (stop.arrive_s, stop.open_s, stop.close_s, stop.depart_s))
         doors = dz[i_open:i_close + 1]
-        worst = lambda row: float(row[np.argmax(np.abs(row))])  # noqa: E731 - the signed value of largest magnitude
+        worst = lambda row: float(row[np.argmax(np.abs(row))])
         outside = np.flatnonzero(np.any(np.abs(dz[i_open:i_dep + 1]) > service.tolerance_m, axis=1))
         relevel = 0.0 if not outside.size else (math.nan if outside[-1] == i_dep - i_open else
                                                 float(t[i_open + outside[-1] + 1] - t[i_open]))

@@ -46,31 +46,48 @@ ADA_STEP_TOLERANCE_M = 0.625 * 0.0254
 
 
 @dataclass(frozen=True)
-class StationStop:
-    """The car stands ``duration_s`` at a platform on its ``platform_side``; its doors on that
-    side are at ``doors_x_m`` (front, centre, rear door; along the car from its centre, +
-    forward; **assumed** +-4.5 m and 0 for a 14 m metro car with three doors a side), their
-    thresholds ``door_y_m`` from the centre line (**assumed** 1.3 m, half a 2.6 m floor). The
-    doors close at ``doors_close_s`` (null: when the last payload event ends, or at the end of a
-    stop without one). ``tolerance_m``: the floor's step-height tolerance at the doors
-    (:data:`ADA_STEP_TOLERANCE_M`). ``valve_settings``: as the twist's (null: one run as
+class Doors:
+    """The car's doors at a platform: along the car at ``doors_x_m`` (front, centre, rear door;
+    from its centre, + forward; **assumed** +-4.5 m and 0 for a 14 m metro car with three doors a
+    side), their thresholds ``door_y_m`` from the centre line (**assumed** 1.3 m, half a 2.6 m
+    floor); ``tolerance_m``: the floor's step-height tolerance at the doors
+    (:data:`ADA_STEP_TOLERANCE_M`)."""
+
+    doors_x_m: Tuple[float, ...] = field(default=(4.5, 0.0, -4.5), metadata=plausible(-20.0, 20.0, "m", "along a carbody"))
+    door_y_m: float = field(default=1.3, metadata=plausible(0.0, 2.0, "m", "half a carbody's width"))
+    tolerance_m: float = field(default=ADA_STEP_TOLERANCE_M, metadata=plausible(
+        0.0, 0.1, "m", "a step height; 0.1 m is a stair, not a tolerance", low_inclusive=False))
+
+    def door_points(self, side: str) -> Tuple[Tuple[float, float], ...]:
+        """(x, y) of the door thresholds on the ``side`` (left or right) of the car."""
+        y = self.door_y_m if side == "left" else -self.door_y_m
+        return tuple((x, y) for x in self.doors_x_m)
+
+
+def check_doors(doors: Doors, path: Path, section: str) -> None:
+    """One door position per floor point (:data:`FLOOR_POINTS`)."""
+    if len(doors.doors_x_m) != len(FLOOR_POINTS):
+        raise ScenarioError(path, [section, "doors_x_m"], f"expected {len(FLOOR_POINTS)} door positions (the "
+                                                          f"{', '.join(FLOOR_POINTS)} door), got {len(doors.doors_x_m)}")
+
+
+@dataclass(frozen=True)
+class StationStop(Doors):
+    """The car stands ``duration_s`` at a platform on its ``platform_side``; its doors there
+    (:class:`Doors`). The doors close at ``doors_close_s`` (null: when the last payload event ends,
+    or at the end of a stop without one). ``valve_settings``: as the twist's (null: one run as
     ``circuit.valves`` says)."""
 
     duration_s: float = field(default=60.0, metadata=plausible(0.0, 3600.0, "s", "a stop, up to an hour",
                                                                 low_inclusive=False))
     platform_side: str = "right"
-    doors_x_m: Tuple[float, ...] = field(default=(4.5, 0.0, -4.5), metadata=plausible(-20.0, 20.0, "m", "along a carbody"))
-    door_y_m: float = field(default=1.3, metadata=plausible(0.0, 2.0, "m", "half a carbody's width"))
     doors_close_s: Optional[float] = field(default=None, metadata=ranged(positive("s")))
-    tolerance_m: float = field(default=ADA_STEP_TOLERANCE_M, metadata=plausible(
-        0.0, 0.1, "m", "a step height; 0.1 m is a stair, not a tolerance", low_inclusive=False))
     valve_settings: Optional[Tuple[bool, ...]] = None
 
     @property
     def door_points_m(self) -> Tuple[Tuple[float, float], ...]:
         """(x, y) of the door thresholds on the platform side."""
-        y = self.door_y_m if self.platform_side == "left" else -self.door_y_m
-        return tuple((x, y) for x in self.doors_x_m)
+        return self.door_points(self.platform_side)
 
 
 def parse(data, vehicle: VehicleParams, path: Path) -> StationStop:
@@ -78,9 +95,7 @@ def parse(data, vehicle: VehicleParams, path: Path) -> StationStop:
     stop = build(StationStop, data, path, ["station"])
     if stop.platform_side not in ("left", "right"):
         raise ScenarioError(path, ["station", "platform_side"], f"expected left or right, got {stop.platform_side!r}")
-    if len(stop.doors_x_m) != len(FLOOR_POINTS):
-        raise ScenarioError(path, ["station", "doors_x_m"], f"expected {len(FLOOR_POINTS)} door positions (the "
-                                                            f"{', '.join(FLOOR_POINTS)} door), got {len(stop.doors_x_m)}")
+    check_doors(stop, path, "station")
     if stop.doors_close_s is not None and not stop.doors_close_s <= stop.duration_s:
         raise ScenarioError(path, ["station", "doors_close_s"], f"the doors must close within the stop "
                                                                 f"({stop.duration_s:g} s), got {stop.doors_close_s:g} s")

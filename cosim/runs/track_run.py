@@ -108,10 +108,14 @@ def track_roll_rad(scenario: Scenario, t_s: np.ndarray) -> np.ndarray:
     bogies do not), in the carbody roll's convention (right hand about the forward axis, positive =
     left side up). ``TrackGeometry.cant_rad(s)`` is signed like the curvature, positive raising the
     right rail (a left-hand curve's outer rail): the plane's roll is minus it."""
-    track = scenario.experiment.track()
-    s = car_centre_s_m(scenario, t_s)
-    cants = [np.asarray(track.cant_rad(np.clip(s + x, 0.0, track.total_length_m)), dtype=float)
-             for x in scenario.vehicle.bogie_x_m]
+    return plane_roll_rad(scenario.experiment.track(), car_centre_s_m(scenario, t_s), scenario.vehicle.bogie_x_m)
+
+
+def plane_roll_rad(track: TrackGeometry, centre_s_m: np.ndarray, bogie_x_m) -> np.ndarray:
+    """:func:`track_roll_rad` of a car whose centre is at arc lengths ``centre_s_m`` on ``track``
+    (bogie centres ``bogie_x_m`` from it)."""
+    cants = [np.asarray(track.cant_rad(np.clip(centre_s_m + x, 0.0, track.total_length_m)), dtype=float)
+             for x in bogie_x_m]
     return -0.5 * (cants[0] + cants[1])
 
 

@@ -195,6 +195,21 @@ def _infinite_default(f: dataclasses.Field) -> bool:
     return isinstance(d, float) and math.isinf(d)
 
 
+#: field metadata of a value a kind sets at load from other sections (not a key of its own: the
+#: reader refuses it and the key reference leaves it out), see :func:`set_at_load`
+SET_AT_LOAD = "set_at_load"
+
+
+def set_at_load(metadata=None) -> dict:
+    """Field metadata (with ``metadata``, e.g. a range) marking a value set at load, not a key."""
+    return {**(metadata or {}), SET_AT_LOAD: True}
+
+
+def is_key(f: dataclasses.Field) -> bool:
+    """Whether field ``f`` is a scenario key (not :func:`set_at_load`)."""
+    return f.init and not f.metadata.get(SET_AT_LOAD, False)
+
+
 def build(cls, data: Any, file, path: Sequence[str], **fixed):
     """Instantiate dataclass ``cls`` from mapping ``data`` (None = all defaults); ``fixed`` are set
     by the caller. Types, finiteness, ranges and list rules are checked (module doc)."""
@@ -203,7 +218,7 @@ def build(cls, data: Any, file, path: Sequence[str], **fixed):
     if not isinstance(data, Mapping):
         raise ScenarioError(file, path, f"expected a mapping of {cls.__name__} parameters, got {describe(data)}")
     hints = typing.get_type_hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    fields = {f.name: f for f in dataclasses.fields(cls) if is_key(f)}
     unknown = [k for k in data if k not in fields or k in fixed]
     if unknown:
         allowed = ", ".join(k for k in fields if k not in fixed)

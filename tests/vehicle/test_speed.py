@@ -42,11 +42,11 @@ def test_a_wrong_profile_is_refused(times, speeds):
 
 @pytest.mark.slow
 def test_a_kinematic_car_runs_at_the_profile_and_stops_where_it_says():
+    import exudyn as exu
+
     from vehicle.car import MetroCar
     from vehicle.params import VehicleParams, metro_car_arb_dampers
     from vehicle.track import Straight, TrackGeometry
-
-    import exudyn as exu
 
     # with traction rods (10 MN/m, 30 kN s/m): the paper's car holds its carbody along the track by
     # the bellows' shear alone, undamped, and it surges +-27 mm for long after the stop

@@ -13,8 +13,8 @@ import numpy as np
 
 from ..params import SPECTRAL_RADIUS, ContactParams, TrackStructure
 from ..payload import PayloadBlock
-from ..track import TrackGeometry
 from ..speed import PhasedSpeedProfile
+from ..track import TrackGeometry
 
 #: Newton's relative tolerance with contact guidance. A step's initial residual is ~M a
 #: there (~30 kN in the paper's curve) against ~700 kN with kinematic guidance, where the

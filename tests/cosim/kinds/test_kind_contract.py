@@ -35,6 +35,11 @@ TINY = {
     "station_stop": ("station_stop.yaml", ["station.duration_s=1", "payload.events[0].t_s=0.2",
                                            "payload.events[0].duration_s=0.5", "payload.events[0].normal_fraction=0.05",
                                            "solver.jobs=1"], "k_W_per_K=0,.inf"),
+    "service": ("service_line.yaml", ["service.stations=[{name: A, at_m: 0, dwell_s: 2, boarding: 3}, "
+                                      "{name: B, at_m: 13, dwell_s: 2, alighting: 3}]", "service.curves=[]",
+                                      "service.round_trip=false", "service.door_open_delay_s=0.5",
+                                      "service.door_close_s=0.5", "service.spread_s=3", "solver.jobs=1"],
+                "k_W_per_K=0,.inf"),
     "stability": ("stability.yaml", ["stability.speeds_m_per_s=[30,50]", "stability.resolution_m_per_s=5",
                                      "stability.reference_speed_m_per_s=30", "solver.jobs=1"], "k_W_per_K=0,.inf"),
 }

@@ -1,0 +1,135 @@
+"""A line in service (cosim/kinds/service.py, cosim/runs/route.py): the route checked at load
+with the key that is wrong, the plan against hand arithmetic (stops where the stations are,
+run times of the trapezoid, the round trip mirrored, the passengers' mass conserved), and a
+short trip's stops and air accounts."""
+from __future__ import annotations
+
+import pytest
+
+from cosim.errors import ScenarioError
+from cosim.load import load_scenario
+from cosim.runs.route import RoutePayload, run_phases, run_time_s
+
+from helpers import SCENARIOS
+
+LINE = SCENARIOS / "service_line.yaml"
+
+
+def test_the_shipped_line_plans_a_round_trip_of_about_30_minutes():
+    service = load_scenario(LINE).experiment
+    plan = service.plan
+    n = len(service.stations)
+    assert len(plan.stops) == 2 * n - 1                                    # out, and back without the terminus twice
+    assert 25 * 60 < plan.duration_s < 32 * 60
+    line_m = service.stations[-1].at_m
+    for stop, st in zip(plan.stops[:n], service.stations):
+        assert stop.s_m - plan.offset_m == st.at_m and stop.platform_side == st.platform_side
+        # the car's centre stands at the station: the speed profile's distance at arrival and
+        # at departure (the exact integral of its phases; 1e-9 m of round-off over 9 km)
+        for t in (stop.arrive_s, stop.depart_s):
+            assert plan.speed.distance(t) == pytest.approx(st.at_m, abs=1e-9)
+    for stop, st in zip(plan.stops[n:], reversed(service.stations[:-1])):
+        assert stop.s_m - plan.offset_m == pytest.approx(2 * line_m - st.at_m, abs=1e-9)
+        assert stop.platform_side != st.platform_side                    # the car runs the other way
+        assert stop.direction == "back"
+
+
+def test_run_phases_are_the_trapezoid_by_hand():
+    # 1000 m at 20 m/s, 1 m/s^2 up and 0.8 m/s^2 down: 200 m in 20 s, 250 m in 25 s, 550 m cruising in 27.5 s
+    assert run_phases(1000.0, 20.0, 1.0, 0.8) == [(20.0, 20.0), (27.5, 20.0), (25.0, 0.0)]
+    # too short to reach the line speed: a triangle to v = sqrt(2 d a b / (a + b)) = 10 m/s for 100 m at 1 m/s^2
+    (t_up, v), (t_down, _) = run_phases(100.0, 20.0, 1.0, 1.0)
+    assert v == pytest.approx(10.0) and t_up == pytest.approx(10.0) and t_down == pytest.approx(10.0)
+    assert run_time_s(100.0, 20.0, 1.0, 1.0) == pytest.approx(20.0)
+
+
+def test_the_return_runs_the_curves_backwards_turning_the_other_way():
+    service = load_scenario(LINE).experiment
+    plan, line_m = service.plan, service.stations[-1].at_m
+    track = plan.track
+    for c in service.curves:
+        mid = c.at_m + c.transition_m + 0.5 * c.arc_m                       # the middle of the arc
+        out = track.curvature_per_m(plan.offset_m + mid)
+        back = track.curvature_per_m(plan.offset_m + 2 * line_m - mid)
+        assert out == pytest.approx((1 if c.direction == "left" else -1) / c.radius_m, rel=1e-12)
+        assert back == pytest.approx(-out, rel=1e-12)
+        assert track.cant_rad(plan.offset_m + 2 * line_m - mid) == pytest.approx(-track.cant_rad(plan.offset_m + mid))
+
+
+def test_the_passengers_mass_is_conserved_along_the_trip():
+    scenario = load_scenario(LINE)
+    service = scenario.experiment
+    plan, kg = service.plan, service.payload_settings.passenger_mass_kg
+    payload = RoutePayload(plan, 14.0, 2.6, 1.7, 1.0)
+    on_board = plan.initial_kg
+    for stop in plan.stops:
+        on_board += stop.boarding_kg - stop.alighting_kg
+        assert stop.on_board_kg == pytest.approx(on_board, abs=1e-9)
+        # the floor carries what the plan says once the doors closed, and once the boarders spread
+        assert payload.total_kg(stop.close_s) == pytest.approx(on_board, abs=1e-9)
+        assert [b.mass_kg for b in payload(stop.depart_s + service.spread_s)][1:] == [0.0, 0.0]
+    # the shipped line: 29 on board at the start, every flow reversed on the way back
+    assert plan.initial_kg == 29 * kg and plan.stops[-1].on_board_kg == pytest.approx(29 * kg)
+    # at t = 0 the payload is centred (the car starts at its symmetric static equilibrium)
+    assert all(b.y_m == 0.0 or b.mass_kg == 0.0 for b in payload(0.0))
+    # while passengers board from a right-hand platform, the load stands right of the centre line
+    first = plan.stops[0]
+    blocks = payload(0.5 * (first.alighted_s + first.close_s))
+    assert first.platform_side == "right" and sum(b.mass_kg * b.y_m for b in blocks) < 0.0
+
+
+@pytest.mark.parametrize("sets, key, words", [
+    (["service.stations[0].at_m=10"], "service.stations[0].at_m", "origin"),
+    (["service.stations[2].at_m=800"], "service.stations[2].at_m", "in order"),
+    (["service.stations[1].dwell_s=4"], "service.stations[1].dwell_s", "longer dwell"),
+    (["service.stations[1].platform_side=up"], "service.stations[1].platform_side", "left or right"),
+    (["service.curves[0].at_m=850"], "service.curves[0].at_m", "station 'B'"),
+    (["service.curves[1].at_m=200"], "service.curves[1].at_m", "in order"),
+    (["service.curves[4].at_m=8900"], "service.curves[4].at_m", "beyond the last station"),
+    (["service.curves[0].direction=up"], "service.curves[0].direction", "left or right"),
+    (["service.spread_s=500"], "service.spread_s", "shortest run"),
+    (["service.stations[0].boarding=300"], "service.stations[0].boarding", "exceptional payload"),
+    (["service.stations[1].alighting=200"], "service.stations[1].alighting", "between none"),
+    (["payload.events=[{t_s: 1, duration_s: 1, passengers: 3}]"], "payload.events", "stations"),
+    (["service.line_speed_m_per_s=70"], None, None),                       # 70 m/s is fast, but a speed
+    (["service.line_speed_m_per_s=700"], "service.line_speed_m_per_s", "360 km/h"),
+    (["service.stations=[{name: A, at_m: 0}]"], "service.stations", "at least two"),
+    (["service.stations[0].colour=red"], "service.stations[0].colour", "unknown key"),
+])
+def test_a_wrong_route_is_refused_naming_its_key(sets, key, words):
+    if key is None:
+        load_scenario(LINE, sets)
+        return
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(LINE, sets)
+    assert key in str(err.value) and words in str(err.value), str(err.value)
+
+
+@pytest.mark.slow
+def test_a_short_trip_reports_its_stops_and_closes_its_air_balance(tmp_path):
+    """Two stations 200 m apart, 10 passengers board at the first and alight at the second, one
+    way, k = 100 W/K: the first stop's floor at arrival is the platform (the reference), the
+    floor sinks while they board and rises when they alight; the valves open; the air balance
+    closes to the integrator's round-off (the circuit holds every flow as a state)."""
+    from cosim.runner import run
+
+    scenario = load_scenario(LINE, ["service.stations=[{name: A, at_m: 0, dwell_s: 12, boarding: 10}, "
+                                    "{name: B, at_m: 200, dwell_s: 12, alighting: 10}]", "service.curves=[]",
+                                    "service.round_trip=false", "payload.initial={passengers: 0}", "solver.jobs=1"],
+                             k_override=[100.0])
+    outcome = run(scenario)
+    (row,) = outcome.rows
+    first, second = outcome.tables["stops"]
+    assert first["floor_dz_arrive_m"] == 0.0
+    # 700 kg before the valves act sinks the floor at the right-hand doors by at most 16 mm: 9.9 mm
+    # on isothermal bellows (4 x 243 / 1.4 kN/m, the softest they get), 1.3 mm on the 5.4 MN/m of
+    # primary springs, < 4 mm of roll at the door 1.3 m out (the load 0.65 m right of centre on
+    # >= 2 MN m/rad of bellows and anti-roll bars); at least the primary's 1.3 mm
+    assert -0.016 < first["floor_dz_min_m"] < -0.0013
+    assert second["floor_dz_max_m"] > second["floor_dz_arrive_m"]
+    assert row["valve_openings"] >= 1 and row["stops"] == 2
+    # 1e-9 kg: the balance's round-off over 50 s of 5 ms steps on ~0.1 kg of air per chamber
+    assert abs(row["mass_balance_error_kg"]) < 1e-9
+    assert row["air_injected_NL"] == pytest.approx(row["air_injected_kg"] / 1.2923 * 1e3, rel=1e-3)
+    payload = outcome.series["service"]["payload_kg"].values.ravel()
+    assert payload[0] == 0.0 and payload[-1] == pytest.approx(0.0, abs=1e-9) and max(payload) == pytest.approx(700.0)
