@@ -37,7 +37,8 @@ from cosim.kinds.base import CarKind
 from cosim.kinds.station_stop import Doors, FloorHeights, check_doors, openings, payload_kg
 from cosim.results.io import Progress
 from cosim.results.outcome import Computed, Outcome, warn
-from cosim.results.plots import Curve, Figure, Panel, k_legend
+from cosim.results.overlay import Selection, case_series
+from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
 from cosim.runs.car import air_columns, fault_columns, of_setting, per_case
 from cosim.runs.route import LineCurve, LineStation, Plan, RoutePayload, plan, run_time_s
 from cosim.runs.track_run import plane_roll_rad
@@ -397,6 +398,21 @@ def figures(outcome: Outcome) -> List[Figure]:
     return out
 
 
+def compare(infos, out_dir: Path, select: Selection, label, window: str) -> List[Path]:
+    """Overlay several service runs: the air injected and the floor at the centre doors, each
+    side relative to its height at the start, over the trip."""
+    run_dirs = [d for d, _ in infos]
+    series = [(d, k, data) for d in run_dirs for k, data in case_series(d, "service_", select)]
+    panels = [Panel([Curve(data["t_s"], data["air_from_supply_kg"] * 1e3, label(d, k)) for d, k, data in series],
+                    "time t [s]", "air injected [g]", "air")]
+    for side in SIDES:
+        column = f"floor_{side}_z_centre_m"
+        panels.append(Panel([Curve(data["t_s"], (data[column] - data[column][0]) * 1e3, label(d, k))
+                             for d, k, data in series], "time t [s]", "floor - at the start [mm]",
+                            f"{side}-hand centre door (in curves: the cant's tilt included)"))
+    return [save_panels(out_dir / "compare_service.png", panels, f"Service comparison{window}", ncols=1)]
+
+
 class ServiceKind(CarKind):
     """A line in service: stops, passengers, curves; the floor at the platforms and the air."""
 
@@ -414,6 +430,7 @@ class ServiceKind(CarKind):
     make_car = staticmethod(make_car)
     run = staticmethod(run)
     figures = staticmethod(figures)
+    compare = staticmethod(compare)
 
     def with_payload(self, experiment, payload, path):
         return with_payload(experiment, payload, path)
