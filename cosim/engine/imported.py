@@ -1,0 +1,246 @@
+"""An FMU as a car's circuit (``circuit: {fmu: ...}``, :mod:`cosim.scenario.imported`): FMPy runs
+it (FMI 2.0 co-simulation), one instance per case, and :class:`ImportedCoSimulation` gives the
+co-simulation master's macro-step exchange around it.
+
+What differs from the native circuit (:class:`cosim.engine.master.CoSimulation`), because an FMU
+gives its outputs at communication points only:
+
+* the force law: the bellow forces the FMU gave at t_n are held over the macro-step (as the
+  master's ``coupling: explicit``): the FMU gives neither dF/dz at constant air mass (no
+  directional derivatives) nor its force's rate at frozen crushing (no state to roll back), so
+  the ``linearised`` law cannot be built; the coupling is first order in the macro-step;
+* the crushing: the FMU is given the crushing and its rate at t_n, and steps to t_n + H; what
+  it does within the step is its own (pneumorail's FMU extrapolates them, docs/fmi.md), not the
+  master's cubic Hermite between t_n and t_n + H;
+* what the record holds: the force, and the pressure, temperature and air totals the map names
+  (NaN where it names none); no flows through links, no valve accounts (those outputs are left
+  out), no faults' air nor net inflow (NaN), and so no mass balance (NaN);
+* a step the FMU refuses (fmi2Discard, fmi2Error, fmi2Fatal) stops that case with a diagnosis,
+  as a diverged circuit does: its record holds NaN from then on, the others go on, the run exits 1.
+"""
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+from types import SimpleNamespace
+from typing import List, Optional, Sequence
+
+import numpy as np
+from fmpy.fmi1 import FMICallException
+
+from cosim.engine.master import OUTPUTS, CoSimulation, Output, Sample
+from cosim.limits.watch import StateWatch
+from cosim.scenario.imported import ImportedCircuit
+
+#: outputs of a native car run the FMU cannot give (they need pneumorail's own links and valves)
+LEFT_OUT = ("link_flow_kg_per_s", "valve_supply_air_kg", "valve_exhaust_air_kg", "valve_supply_open_s",
+            "valve_exhaust_open_s")
+
+
+class FmuCircuit:
+    """One instance of the FMU (FMPy ``FMU2Slave``) as one case's circuit, the bellows in the
+    order of ``spec.bellows`` (FL, FR, RL, RR)."""
+
+    def __init__(self, spec: ImportedCircuit, unzipped: str, k_W_per_K: float, pneumatic_step_s: Optional[float],
+                 instance_name: str):
+        from fmpy import read_model_description
+        from fmpy.fmi2 import FMU2Slave
+        md = read_model_description(unzipped)
+        ref = {v.name: v.valueReference for v in md.modelVariables}
+        self.spec = spec
+        self.inputs = [ref[b.crushing] for b in spec.bellows] + [ref[b.rate] for b in spec.bellows]
+        self.forces = [ref[b.force] for b in spec.bellows]
+        # the recorded outputs: (name, index in the values read, or None: not mapped)
+        recorded = [b.pressure for b in spec.bellows] + [b.temperature for b in spec.bellows] + \
+            [dict(spec.air).get(key) for key in ("total_mass_kg", "air_from_supply_kg", "air_to_atmosphere_kg")]
+        self._read = self.forces + [ref[name] for name in recorded if name is not None]
+        self._where = []
+        i = len(self.forces)
+        for name in recorded:
+            self._where.append(i if name is not None else None)
+            i += name is not None
+        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=spec.model_identifier,
+                               instanceName=instance_name)
+        self.slave.instantiate()
+        self._parameters = []
+        if spec.k_W_per_K is not None:
+            if math.isinf(k_W_per_K):
+                self._parameters.append(("Boolean", ref[spec.isothermal], True))
+            else:
+                self._parameters.append(("Real", ref[spec.k_W_per_K], float(k_W_per_K)))
+                if spec.isothermal is not None:
+                    self._parameters.append(("Boolean", ref[spec.isothermal], False))
+        if spec.pneumatic_step_s is not None and pneumatic_step_s is not None:
+            self._parameters.append(("Real", ref[spec.pneumatic_step_s], float(pneumatic_step_s)))
+        self.values = np.full(len(self._read), np.nan)
+
+    def start(self, t0: float, z: np.ndarray, zd: np.ndarray) -> None:
+        """Parameters and the crushing at ``t0`` set, initialised; the outputs at t0 read."""
+        s = self.slave
+        s.setupExperiment(startTime=t0)
+        s.enterInitializationMode()
+        for type_, vr, value in self._parameters:
+            (s.setBoolean if type_ == "Boolean" else s.setReal)([vr], [value])
+        s.setReal(self.inputs, [*map(float, z), *map(float, zd)])
+        s.exitInitializationMode()
+        self._sample()
+
+    def step(self, t: float, H: float, z: np.ndarray, zd: np.ndarray) -> None:
+        """The crushing and its rate at ``t`` in, one communication step to t + H, the outputs
+        at t + H read; an FMI status worse than warning raises (FMPy's ``FMICallException``)."""
+        self.slave.setReal(self.inputs, [*map(float, z), *map(float, zd)])
+        self.slave.doStep(currentCommunicationPoint=t, communicationStepSize=H)
+        self._sample()
+
+    def _sample(self) -> None:
+        self.values = np.asarray(self.slave.getReal(self._read), dtype=float)
+
+    def output(self, i: int) -> float:
+        """Recorded output ``i`` (pressures, temperatures, air totals in turn), NaN if not mapped."""
+        where = self._where[i]
+        return float(self.values[where]) if where is not None else math.nan
+
+    def close(self) -> None:
+        try:
+            self.slave.terminate()
+        finally:
+            self.slave.freeInstance()
+
+
+class _AirView:
+    """What the master's outputs (:data:`cosim.engine.master.OUTPUTS`) read from a circuit, for
+    the FMUs of a run: forces, pressures and temperatures (bellow x case), the air totals the map
+    names; NaN where the FMU gives nothing."""
+
+    has_air_supply = False
+    node_names = ("supply", "atmosphere")
+
+    def __init__(self, sim: "ImportedCoSimulation"):
+        self.sim = sim
+        n = len(sim.fmus[0].spec.bellows)
+        self.bellow_names = tuple(b.bellow for b in sim.fmus[0].spec.bellows)
+        self.chamber_names = self.bellow_names
+        self._n = n
+
+    def _per_case(self, i: int) -> np.ndarray:
+        return np.array([fmu.output(i) for fmu in self.sim.fmus])
+
+    def pressures_temperatures(self):
+        n = self._n
+        p = np.array([[fmu.output(i) for fmu in self.sim.fmus] for i in range(n)])
+        T = np.array([[fmu.output(n + i) for fmu in self.sim.fmus] for i in range(n)])
+        return p, T
+
+    def total_mass_kg(self, x=None) -> np.ndarray:
+        return self._per_case(2 * self._n)
+
+    def mass_from(self, x, node: str) -> np.ndarray:
+        """Air that left ``node`` (cumulative): from the supply as mapped; to the atmosphere as
+        mapped (the FMU gives what went in, so the sign is turned as the master's output turns it back)."""
+        if node == "supply":
+            return self._per_case(2 * self._n + 1)
+        return -self._per_case(2 * self._n + 2)
+
+    def air_lost_kg(self, x=None) -> np.ndarray:
+        return np.full(len(self.sim.fmus), np.nan)
+
+    net_inflow_kg = air_lost_kg
+
+
+class ImportedCoSimulation(CoSimulation):
+    """The master's macro-step exchange (:class:`~cosim.engine.master.CoSimulation`: its cars,
+    sampling, stopping and running) with FMUs as the circuit, one per car (see the module
+    docstring for what differs)."""
+
+    def __init__(self, cars: Sequence, fmus: Sequence[FmuCircuit], macro_step_s: float,
+                 case_labels: Optional[Sequence[str]] = None, watch: Optional[StateWatch] = None,
+                 extra_outputs: Sequence[Output] = (), unzipped: Optional[str] = None):
+        self.cars, self.fmus = list(cars), list(fmus)
+        self.outputs = tuple(o for o in (*OUTPUTS, *extra_outputs) if o.name not in LEFT_OUT)
+        self.H, self.coupling = macro_step_s, "explicit"
+        self.t = 0.0
+        self.labels = list(case_labels or (f"case {j}" for j in range(len(self.cars))))
+        self.active = np.ones(len(self.cars), bool)
+        self.diagnoses: List[str] = []
+        self.z, self.zd = self._crushing()
+        self.x = None
+        self.circuit = _AirView(self)
+        self.bellow_chambers = list(range(len(self.circuit.bellow_names)))
+        self.contact = any(getattr(car, "guidance", "kinematic") == "contact" for car in self.cars)
+        self.watch = watch
+        self._watch_every = max(1, round(StateWatch.INTERVAL_S / macro_step_s))
+        self._steps = 0
+        self._unzipped = unzipped
+        for j, fmu in enumerate(self.fmus):
+            fmu.start(0.0, self.z[:, j], self.zd[:, j])
+        self._F = self._forces()
+
+    def _forces(self) -> np.ndarray:
+        """The bellow forces the FMUs gave at their last communication point (bellow x case)."""
+        return np.stack([fmu.values[:len(fmu.forces)] for fmu in self.fmus], axis=1)
+
+    def step(self) -> None:
+        """One macro-step: the cars advance under the forces of t_n (held), then each FMU steps
+        from t_n with the crushing of t_n."""
+        t1 = self.t + self.H
+        zero = np.zeros_like(self._F)
+        self._advance_cars(self._F, zero, zero, t1)
+        z1, zd1 = self._crushing()
+        if self.watch is not None and self._steps % self._watch_every == 0:
+            for j in np.flatnonzero(self.active):
+                reason = self.watch.car(j, self.cars[j], t1)
+                if reason:
+                    self._stop(j, f"impossible state: {reason}")
+        for j in np.flatnonzero(self.active):
+            try:
+                self.fmus[j].step(self.t, self.H, self.z[:, j], self.zd[:, j])
+            except FMICallException as exc:           # fmi2Discard, fmi2Error, fmi2Fatal
+                self._stop(j, f"the FMU {self.fmus[j].spec.fmu} refused its step from t = {self.t:.6g} to {t1:.6g} s: "
+                              f"{exc}")
+        if self.watch is not None and self._steps % self._watch_every == 0:
+            p, T = self.circuit.pressures_temperatures()
+            if not (np.isnan(p).all() or np.isnan(T).all()):
+                for j, reason in enumerate(self.watch.air(p, T, self.circuit.chamber_names, t1)):
+                    if reason and self.active[j]:
+                        self._stop(j, f"impossible state: {reason}")
+        self._steps += 1
+        F = self._forces()
+        F[:, ~self.active] = self._F[:, ~self.active]  # stopped cases stay frozen
+        self._F = F
+        self.t, self.z, self.zd = t1, z1, zd1
+
+    def sample(self, record) -> None:
+        """Append the current outputs (NaN for a stopped case), those the FMU cannot give left out."""
+        p, T = self.circuit.pressures_temperatures()
+        now = Sample(self, SimpleNamespace(bellow_force_N=self._F, p_Pa=p, T_K=T), None, None)
+        stopped = ~self.active
+        record.t_s.append(self.t)
+        for output in self.outputs:
+            if (output.contact and not self.contact) or output.air_supply:
+                continue
+            values = np.array(output.read(now), dtype=float)
+            if stopped.any():
+                values[..., stopped] = np.nan
+            record.values[output.name].append(values)
+
+    def close(self) -> None:
+        """Every FMU terminated and freed, its unzipped folder removed."""
+        for fmu in self.fmus:
+            try:
+                fmu.close()
+            except FMICallException:                  # a refused step may leave an instance that cannot terminate
+                pass
+        if self._unzipped:
+            shutil.rmtree(self._unzipped, ignore_errors=True)
+
+
+def build_imported(scenario, k_values: Sequence[float], cars: Sequence, labels: Sequence[str], watch,
+                   extra_outputs: Sequence[Output] = ()) -> ImportedCoSimulation:
+    """The cars and, per car, an instance of the scenario's FMU at its k (unzipped once)."""
+    from fmpy import extract
+    spec: ImportedCircuit = scenario.circuit
+    unzipped = extract(spec.fmu, unzipdir=tempfile.mkdtemp(prefix="pneumorail_fmu_import_"))
+    fmus = [FmuCircuit(spec, unzipped, k, scenario.solver.pneumatic_step_s, f"{scenario.name}_{j}")
+            for j, k in enumerate(k_values)]
+    return ImportedCoSimulation(cars, fmus, scenario.solver.macro_step_s, labels, watch, extra_outputs, unzipped)
