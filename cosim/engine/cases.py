@@ -55,10 +55,6 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
                         case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch, extra_outputs=extra_outputs)
 
 
-def _labels(circuit):
-    return circuit.link_names, circuit.valve_names
-
-
 def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]:
     scenario, k_values, make_car, duration_s, label, extra_outputs = args
     cosim = build_cosimulation(scenario, k_values, make_car, extra_outputs)
@@ -168,7 +164,8 @@ def simulate_scenarios(scenarios: Sequence[Scenario], settings: Sequence[Optiona
     for i in range(len(scenarios)):
         datasets, diagnoses = [], []
         for variant, (chunks, diag) in zip(variants[i * n:(i + 1) * n], results[i * n:(i + 1) * n]):
-            links, valve_names = ((), ()) if is_imported(variant.circuit) else _labels(variant.circuit.compile())
+            circuit = None if is_imported(variant.circuit) else variant.circuit.compile()   # an FMU's: no links, valves
+            links, valve_names = (circuit.link_names, circuit.valve_names) if circuit else ((), ())
             valves = variant.circuit.valves
             parts = [car_dataset(arrays, (*OUTPUTS, *extra_outputs), ks, valves, named, links, valve_names)
                      for ks, arrays in chunks]
