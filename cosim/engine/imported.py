@@ -30,6 +30,7 @@ import numpy as np
 from fmpy.fmi1 import FMICallException
 
 from cosim.engine.master import OUTPUTS, CoSimulation, Output, Sample
+from cosim.errors import ScenarioError
 from cosim.limits.watch import StateWatch
 from cosim.scenario.imported import ImportedCircuit
 
@@ -43,7 +44,7 @@ class FmuCircuit:
     order of ``spec.bellows`` (FL, FR, RL, RR)."""
 
     def __init__(self, spec: ImportedCircuit, unzipped: str, k_W_per_K: float, pneumatic_step_s: Optional[float],
-                 instance_name: str):
+                 instance_name: str, scenario_file=None):
         from fmpy import read_model_description
         from fmpy.fmi2 import FMU2Slave
         md = read_model_description(unzipped)
@@ -62,7 +63,12 @@ class FmuCircuit:
             i += name is not None
         self.slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=spec.model_identifier,
                                instanceName=instance_name)
-        self.slave.instantiate()
+        try:
+            self.slave.instantiate()
+        except Exception as exc:                      # noqa: BLE001 -- FMPy raises a plain Exception when it fails
+            raise ScenarioError(scenario_file, ["circuit", "fmu"], f"the FMU {spec.fmu} could not be instantiated "
+                                                                 f"({exc}): it runs in this Python (pythonfmu's FMUs: "
+                                                                 f"docs/fmi.md, \"What the importing machine needs\")") from None
         self._parameters = []
         if spec.k_W_per_K is not None:
             if math.isinf(k_W_per_K):
@@ -241,6 +247,14 @@ def build_imported(scenario, k_values: Sequence[float], cars: Sequence, labels: 
     from fmpy import extract
     spec: ImportedCircuit = scenario.circuit
     unzipped = extract(spec.fmu, unzipdir=tempfile.mkdtemp(prefix="pneumorail_fmu_import_"))
-    fmus = [FmuCircuit(spec, unzipped, k, scenario.solver.pneumatic_step_s, f"{scenario.name}_{j}")
-            for j, k in enumerate(k_values)]
+    fmus: List[FmuCircuit] = []
+    try:
+        for j, k in enumerate(k_values):
+            fmus.append(FmuCircuit(spec, unzipped, k, scenario.solver.pneumatic_step_s, f"{scenario.name}_{j}",
+                                   scenario.file))
+    except ScenarioError:
+        for fmu in fmus:
+            fmu.close()
+        shutil.rmtree(unzipped, ignore_errors=True)
+        raise
     return ImportedCoSimulation(cars, fmus, scenario.solver.macro_step_s, labels, watch, extra_outputs, unzipped)

@@ -33,6 +33,15 @@ PARAMETER_KEYS = {"k_W_per_K": ("Real", "W/K"), "isothermal": ("Boolean", None),
 PNEUMORAIL_IDENTIFIER = "PneumorailCircuit"
 
 
+def installed_version() -> str:
+    """pneumorail's version here (as the FMU's slave reads it, cosim.fmi.slave)."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("pneumorail")
+    except PackageNotFoundError:
+        return "not installed"
+
+
 def pneumorail_map() -> dict:
     """The map of an FMU ``pneumorail fmu`` exported (its variable names: docs/fmi.md)."""
     return {**{b: {"crushing": f"bellow_{b}.z_m", "rate": f"bellow_{b}.zdot_m_per_s", "force": f"bellow_{b}.F_N",
@@ -114,6 +123,10 @@ def imported_circuit(data: Mapping, file) -> ImportedCircuit:
         raise ScenarioError(file, P + ["fmu"], f"{str(path)!r} is a model-exchange FMU (no CoSimulation element): "
                                                f"only co-simulation FMUs are imported (the FMU must integrate itself)")
     identifier = md.coSimulation.modelIdentifier
+    if identifier == PNEUMORAIL_IDENTIFIER and md.version != installed_version():
+        raise ScenarioError(file, P + ["fmu"], f"{str(path)!r} was exported by pneumorail {md.version}; this is "
+                                               f"pneumorail {installed_version()}: its slave runs pneumorail's own classes, "
+                                               f"export it again with this version (docs/fmi.md)")
     variables = {v.name: v for v in md.modelVariables}
     if "map" in data:
         given = data["map"]

@@ -347,3 +347,38 @@ def test_a_step_the_fmu_refuses_stops_the_run_with_a_diagnosis(tmp_path):
     data = np.genfromtxt(csv, delimiter=",", skip_header=1)
     t, force = data[:, 0], data[:, csv.read_text().splitlines()[0].split(",").index("F_bellow_FL_N")]
     assert np.isfinite(force[t < 0.05]).all() and np.isnan(force[t > 0.05]).all()
+
+
+def _rewritten(fmu: Path, out: Path, change) -> Path:
+    """A copy of ``fmu`` whose members pass through ``change(name, bytes) -> bytes``."""
+    with zipfile.ZipFile(fmu) as zi, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zo:
+        for item in zi.infolist():
+            zo.writestr(item, change(item.filename, zi.read(item.filename)))
+    return out
+
+
+def test_an_fmu_of_another_pneumorail_version_is_refused_at_load(twist, tmp_path, capsys):
+    """Its slave runs pneumorail's own classes (docs/fmi.md): its model description's version
+    must be this one's."""
+    def older(name, data):
+        return re.sub(rb' version="[^"]*">', b' version="0.0.1">', data, count=1) if name == "modelDescription.xml" else data
+    _rewritten(twist.with_name("twist.fmu"), tmp_path / "c.fmu", older)
+    err = _refused(tmp_path, capsys, _scenario(tmp_path, "fmu: c.fmu\n"))
+    assert re.search(r"circuit\.fmu: '.*c\.fmu' was exported by pneumorail 0\.0\.1; this is pneumorail .*: its slave runs "
+                     r"pneumorail's own classes, export it again", err), err
+
+
+@pytest.mark.slow
+def test_an_fmu_that_cannot_be_instantiated_is_an_error_not_a_traceback(twist, tmp_path):
+    """The slave refuses to start (here: the circuit it carries says another pneumorail version,
+    which only the slave sees): fmi2Instantiate fails in the worker; the run says which FMU, exit 2."""
+    import pickle
+
+    def older(name, data):
+        return pickle.dumps({**pickle.loads(data), "pneumorail_version": "0.0.1"}) \
+            if name == "resources/circuit.pickle" else data
+    _rewritten(twist.with_name("twist.fmu"), tmp_path / "c.fmu", older)
+    run = _cli("run", _scenario(tmp_path, "fmu: c.fmu\n"), "--out", tmp_path / "out", "--quiet",
+               "--set", "twist.ramp_s=0.1", "--set", "twist.hold_s=0.1")
+    assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr[-3000:]
+    assert re.search(r"circuit\.fmu: the FMU .*c\.fmu could not be instantiated", run.stderr), run.stderr
