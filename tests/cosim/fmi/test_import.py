@@ -382,3 +382,90 @@ def test_an_fmu_that_cannot_be_instantiated_is_an_error_not_a_traceback(twist, t
                "--set", "twist.ramp_s=0.1", "--set", "twist.hold_s=0.1")
     assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr[-3000:]
     assert re.search(r"circuit\.fmu: the FMU .*c\.fmu could not be instantiated", run.stderr), run.stderr
+
+
+# -- what the difference to the native run is made of ----------------------------------------------
+
+RECORD = textwrap.dedent("""
+    import os, sys
+    import numpy as np
+    from cosim.engine.cases import build_cosimulation
+    from cosim.kinds import KINDS
+    from cosim.load import load_scenario
+    scenario, out = sys.argv[1], sys.argv[2]
+    s = load_scenario(scenario, overrides=["twist.ramp_s=0.5", "twist.hold_s=0.5"], k_override=[10.0])
+    sim = build_cosimulation(s, [10.0], KINDS[s.kind].make_car)
+    record, diagnosis = sim.run(s.experiment.duration_s, s.solver.output_interval_s)
+    assert diagnosis is None, diagnosis
+    arrays = record.arrays()
+    np.save(out, np.concatenate([arrays["wheel_load_N"][..., 0], arrays["bellow_force_N"][..., 0]], axis=1))
+    sim.close()
+    sys.stdout.flush()
+    os._exit(0)
+""")
+
+
+class OwnCircuit:
+    """The FMU's own slave class (cosim.fmi.slave, from the FMU's resources) run in this process
+    without FMI: the interface of :class:`cosim.engine.imported.FmuCircuit` around pneumorail's
+    circuit integrated exactly as the FMU integrates it."""
+
+    def __init__(self, fmu: Path, folder: Path, spec, pneumatic_step_s: float):
+        from cosim.fmi.slave import PneumorailCircuit
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(folder)
+        self.slave = PneumorailCircuit(instance_name="own", resources=str(folder / "resources"))
+        self.slave.pneumatic_step_s = pneumatic_step_s
+        self.spec, self.forces = spec, [0, 1, 2, 3]
+
+    def _set(self, z, zd):
+        self.slave.z_m[:], self.slave.zdot_m_per_s[:] = list(map(float, z)), list(map(float, zd))
+
+    def _read(self):
+        s = self.slave
+        self.values = np.array(s.F_N + s.p_Pa + s.T_K + [s.total_air_mass_kg, s.air_injected_kg, s.air_exhausted_kg])
+
+    def start(self, t0, z, zd):
+        self._set(z, zd)
+        self.slave.exit_initialization_mode()
+        self._read()
+
+    def step(self, t, H, z, zd):
+        self._set(z, zd)
+        self.slave.do_step(t, H)
+        self._read()
+
+    def output(self, i):
+        return float(self.values[4 + i])
+
+    def close(self):
+        pass
+
+
+@pytest.mark.slow
+def test_through_fmpy_the_fmu_is_pneumorails_own_circuit_under_the_same_exchange(twist, tmp_path):
+    """The experiment behind the round trip's numbers: the twist (k = 10, 0.5 s ramp and hold)
+    through the FMU (FMPy, FMI calls, pythonfmu's wrapper) and through the FMU's slave class run
+    in this process with the same exchange (:class:`ImportedCoSimulation`) give the same wheel
+    loads and bellow forces to the last bit. So the FMI transport adds nothing; what differs from
+    the native run is the exchange: the held force and the extrapolated crushing (the twist test
+    above). Measured: identical."""
+    from cosim.engine.imported import ImportedCoSimulation
+    from cosim.kinds import KINDS
+    from cosim.limits.watch import StateWatch
+    out = tmp_path / "fmu.npy"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    run = subprocess.run([sys.executable, "-c", RECORD, str(twist), str(out)], capture_output=True, text=True, env=env,
+                         timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    through_fmu = np.load(out)
+    s = load_scenario(twist, overrides=["twist.ramp_s=0.5", "twist.hold_s=0.5"], k_override=[10.0])
+    car = KINDS[s.kind].make_car(s)
+    own = OwnCircuit(twist.with_name("twist.fmu"), tmp_path / "own", s.circuit, s.solver.pneumatic_step_s)
+    sim = ImportedCoSimulation([car], [own], s.solver.macro_step_s, watch=StateWatch(s.state_limits, 1, car.bellow_height_m))
+    record, diagnosis = sim.run(s.experiment.duration_s, s.solver.output_interval_s)
+    assert diagnosis is None
+    arrays = record.arrays()
+    in_process = np.concatenate([arrays["wheel_load_N"][..., 0], arrays["bellow_force_N"][..., 0]], axis=1)
+    assert through_fmu.shape == in_process.shape == (51, 12)
+    np.testing.assert_array_equal(through_fmu, in_process)
