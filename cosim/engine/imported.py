@@ -44,14 +44,18 @@ class FmuCircuit:
     order of ``spec.bellows`` (FL, FR, RL, RR)."""
 
     def __init__(self, spec: ImportedCircuit, unzipped: str, k_W_per_K: float, pneumatic_step_s: Optional[float],
-                 instance_name: str, scenario_file=None):
+                 macro_step_s: float, instance_name: str, scenario_file=None):
         from fmpy import read_model_description
         from fmpy.fmi2 import FMU2Slave
         md = read_model_description(unzipped)
         ref = {v.name: v.valueReference for v in md.modelVariables}
         self.spec = spec
-        self.inputs = [ref[b.crushing] for b in spec.bellows] + [ref[b.rate] for b in spec.bellows]
-        self.forces = [ref[b.force] for b in spec.bellows]
+        self.native = spec.native_exchange
+        ends = ("crushing", "rate", "crushing_end", "rate_end") if self.native else ("crushing", "rate")
+        self.inputs = [ref[getattr(b, key)] for key in ends for b in spec.bellows]
+        law = ("force", "stiffness", "force_rate") if self.native else ("force",)
+        #: the force law's outputs first (force; with the native exchange, stiffness and force rate)
+        self.forces = [ref[getattr(b, key)] for key in law for b in spec.bellows]
         # the recorded outputs: (name, index in the values read, or None: not mapped)
         recorded = [b.pressure for b in spec.bellows] + [b.temperature for b in spec.bellows] + \
             [dict(spec.air).get(key) for key in ("total_mass_kg", "air_from_supply_kg", "air_to_atmosphere_kg")]
@@ -79,6 +83,8 @@ class FmuCircuit:
                     self._parameters.append(("Boolean", ref[spec.isothermal], False))
         if spec.pneumatic_step_s is not None and pneumatic_step_s is not None:
             self._parameters.append(("Real", ref[spec.pneumatic_step_s], float(pneumatic_step_s)))
+        if self.native:
+            self._parameters += [("Boolean", ref[spec.lookahead], True), ("Real", ref[spec.macro_step_s], macro_step_s)]
         self.values = np.full(len(self._read), np.nan)
 
     def start(self, t0: float, z: np.ndarray, zd: np.ndarray) -> None:
@@ -88,16 +94,28 @@ class FmuCircuit:
         s.enterInitializationMode()
         for type_, vr, value in self._parameters:
             (s.setBoolean if type_ == "Boolean" else s.setReal)([vr], [value])
-        s.setReal(self.inputs, [*map(float, z), *map(float, zd)])
+        s.setReal(self.inputs, self._values(z, zd, z, zd))
         s.exitInitializationMode()
         self._sample()
 
-    def step(self, t: float, H: float, z: np.ndarray, zd: np.ndarray) -> None:
-        """The crushing and its rate at ``t`` in, one communication step to t + H, the outputs
-        at t + H read; an FMI status worse than warning raises (FMPy's ``FMICallException``)."""
-        self.slave.setReal(self.inputs, [*map(float, z), *map(float, zd)])
+    def step(self, t: float, H: float, z: np.ndarray, zd: np.ndarray, z1: np.ndarray, zd1: np.ndarray) -> None:
+        """The crushing and its rate at ``t`` (and, with the native exchange, at t + H: ``z1``,
+        ``zd1``) in, one communication step to t + H, the outputs at t + H read; an FMI status
+        worse than warning raises (FMPy's ``FMICallException``)."""
+        self.slave.setReal(self.inputs, self._values(z, zd, z1, zd1))
         self.slave.doStep(currentCommunicationPoint=t, communicationStepSize=H)
         self._sample()
+
+    def _values(self, z, zd, z1, zd1) -> list:
+        ends = (z, zd, z1, zd1) if self.native else (z, zd)
+        return [float(v) for end in ends for v in end]
+
+    def law(self):
+        """(force, stiffness, force rate) at the last communication point, each (bellows,); the
+        last two None without the native exchange."""
+        n = len(self.spec.bellows)
+        v = self.values
+        return (v[:n], v[n:2 * n], v[2 * n:3 * n]) if self.native else (v[:n], None, None)
 
     def _sample(self) -> None:
         self.values = np.asarray(self.slave.getReal(self._read), dtype=float)
@@ -106,6 +124,12 @@ class FmuCircuit:
         """Recorded output ``i`` (pressures, temperatures, air totals in turn), NaN if not mapped."""
         where = self._where[i]
         return float(self.values[where]) if where is not None else math.nan
+
+    def used_step_s(self) -> float:
+        """The pneumatic sub-step the FMU initialised with (its ``pneumatic_step_used_s``)."""
+        from fmpy import read_model_description
+        ref = {v.name: v.valueReference for v in read_model_description(self.slave.unzipDirectory).modelVariables}
+        return float(self.slave.getReal([ref[self.spec.pneumatic_step_used_s]])[0])
 
     def close(self) -> None:
         try:
@@ -157,14 +181,16 @@ class _AirView:
 class ImportedCoSimulation(CoSimulation):
     """The master's macro-step exchange (:class:`~cosim.engine.master.CoSimulation`: its cars,
     sampling, stopping and running) with FMUs as the circuit, one per car (see the module
-    docstring for what differs)."""
+    docstring for what differs). ``coupling``: the master's, with an FMU of the native exchange;
+    otherwise the force is held (``explicit``)."""
 
     def __init__(self, cars: Sequence, fmus: Sequence[FmuCircuit], macro_step_s: float,
                  case_labels: Optional[Sequence[str]] = None, watch: Optional[StateWatch] = None,
-                 extra_outputs: Sequence[Output] = (), unzipped: Optional[str] = None):
+                 extra_outputs: Sequence[Output] = (), unzipped: Optional[str] = None, coupling: str = "linearised"):
         self.cars, self.fmus = list(cars), list(fmus)
         self.outputs = tuple(o for o in (*OUTPUTS, *extra_outputs) if o.name not in LEFT_OUT)
-        self.H, self.coupling = macro_step_s, "explicit"
+        self.native = all(f.native for f in self.fmus)
+        self.H, self.coupling = macro_step_s, coupling if self.native else "explicit"
         self.t = 0.0
         self.labels = list(case_labels or (f"case {j}" for j in range(len(self.cars))))
         self.active = np.ones(len(self.cars), bool)
@@ -180,18 +206,33 @@ class ImportedCoSimulation(CoSimulation):
         self._unzipped = unzipped
         for j, fmu in enumerate(self.fmus):
             fmu.start(0.0, self.z[:, j], self.zd[:, j])
-        self._F = self._forces()
+        self._F = self._law()[0]
+        self._F_end = None  # with the native exchange: the forces the cars feel at the end of the last step
 
-    def _forces(self) -> np.ndarray:
-        """The bellow forces the FMUs gave at their last communication point (bellow x case)."""
-        return np.stack([fmu.values[:len(fmu.forces)] for fmu in self.fmus], axis=1)
+    def _law(self):
+        """The FMUs' force, stiffness and force rate at their last communication point (each
+        bellow x case; the last two None without the native exchange)."""
+        laws = [fmu.law() for fmu in self.fmus]
+        return tuple(None if laws[0][i] is None else np.stack([law[i] for law in laws], axis=1) for i in range(3))
+
+    def _force_laws(self):
+        """The bellow force laws of this step, each (bellow, case): (F_s, K_n, (F_e - F_s) / H) as
+        the master's (:meth:`CoSimulation._force_laws`) from what the FMUs gave at t_n; without
+        the native exchange, or with ``coupling: explicit``, the force held."""
+        F_now, K, dF_dt = self._law()
+        F_now[:, ~self.active] = self._F[:, ~self.active]   # stopped cases stay frozen
+        if self.coupling != "linearised":
+            zero = np.zeros_like(F_now)
+            return F_now, zero, zero
+        F_start = F_now if self._F_end is None else self._F_end
+        return F_start, K, (F_now + self.H * dF_dt - F_start) / self.H
 
     def step(self) -> None:
-        """One macro-step: the cars advance under the forces of t_n (held), then each FMU steps
-        from t_n with the crushing of t_n."""
+        """One macro-step: the cars advance under the force laws of t_n, then each FMU steps from
+        t_n with the crushing of t_n (and, with the native exchange, of t_n + H)."""
         t1 = self.t + self.H
-        zero = np.zeros_like(self._F)
-        self._advance_cars(self._F, zero, zero, t1)
+        F_start, K, F_rate = self._force_laws()
+        self._advance_cars(F_start, K, F_rate, t1)
         z1, zd1 = self._crushing()
         if self.watch is not None and self._steps % self._watch_every == 0:
             for j in np.flatnonzero(self.active):
@@ -200,7 +241,7 @@ class ImportedCoSimulation(CoSimulation):
                     self._stop(j, f"impossible state: {reason}")
         for j in np.flatnonzero(self.active):
             try:
-                self.fmus[j].step(self.t, self.H, self.z[:, j], self.zd[:, j])
+                self.fmus[j].step(self.t, self.H, self.z[:, j], self.zd[:, j], z1[:, j], zd1[:, j])
             except FMICallException as exc:           # fmi2Discard, fmi2Error, fmi2Fatal
                 self._stop(j, f"the FMU {self.fmus[j].spec.fmu} refused its step from t = {self.t:.6g} to {t1:.6g} s: "
                               f"{exc}")
@@ -211,9 +252,10 @@ class ImportedCoSimulation(CoSimulation):
                     if reason and self.active[j]:
                         self._stop(j, f"impossible state: {reason}")
         self._steps += 1
-        F = self._forces()
+        F = self._law()[0]
         F[:, ~self.active] = self._F[:, ~self.active]  # stopped cases stay frozen
         self._F = F
+        self._F_end = F_start + self.H * F_rate + K * (z1 - self.z)  # what the cars feel at t1
         self.t, self.z, self.zd = t1, z1, zd1
 
     def sample(self, record) -> None:
@@ -248,13 +290,25 @@ def build_imported(scenario, k_values: Sequence[float], cars: Sequence, labels: 
     spec: ImportedCircuit = scenario.circuit
     unzipped = extract(spec.fmu, unzipdir=tempfile.mkdtemp(prefix="pneumorail_fmu_import_"))
     fmus: List[FmuCircuit] = []
+    settings = scenario.solver
     try:
+        h = settings.pneumatic_step_s
+        if spec.pneumatic_step_used_s is not None:
+            # every case takes the sub-step of all the scenario's k values, as a native run does
+            # (cosim.engine.cases.build_cosimulation): a case's numbers do not depend on its chunk
+            zero = np.zeros(len(spec.bellows))
+            for k in sorted(set(scenario.k_W_per_K) | set(k_values)):
+                fmus.append(FmuCircuit(spec, unzipped, k, settings.pneumatic_step_s, settings.macro_step_s,
+                                       f"{scenario.name}_probe", scenario.file))
+                fmus[-1].start(0.0, zero, zero)
+                h = min(h, fmus[-1].used_step_s())
+                fmus.pop().close()
         for j, k in enumerate(k_values):
-            fmus.append(FmuCircuit(spec, unzipped, k, scenario.solver.pneumatic_step_s, f"{scenario.name}_{j}",
-                                   scenario.file))
+            fmus.append(FmuCircuit(spec, unzipped, k, h, settings.macro_step_s, f"{scenario.name}_{j}", scenario.file))
     except ScenarioError:
         for fmu in fmus:
             fmu.close()
         shutil.rmtree(unzipped, ignore_errors=True)
         raise
-    return ImportedCoSimulation(cars, fmus, scenario.solver.macro_step_s, labels, watch, extra_outputs, unzipped)
+    return ImportedCoSimulation(cars, fmus, scenario.solver.macro_step_s, labels, watch, extra_outputs, unzipped,
+                                scenario.solver.coupling)

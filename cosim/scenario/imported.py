@@ -23,11 +23,22 @@ from pneumatics.layouts import BELLOWS
 
 #: per bellow: map key -> (required, causality, unit)
 BELLOW_KEYS = {"crushing": (True, "input", "m"), "rate": (True, "input", "m/s"), "force": (True, "output", "N"),
-               "pressure": (False, "output", "Pa"), "temperature": (False, "output", "K")}
+               "pressure": (False, "output", "Pa"), "temperature": (False, "output", "K"),
+               "crushing_end": (False, "input", "m"), "rate_end": (False, "input", "m/s"),
+               "stiffness": (False, "output", "N/m"), "force_rate": (False, "output", "N/s")}
 #: ``map.air``: the car run's air outputs an FMU output may give (each cumulative or a total) [kg]
 AIR_KEYS = ("total_mass_kg", "air_from_supply_kg", "air_to_atmosphere_kg")
 #: the parameters a map may name: key -> (variable type, unit)
-PARAMETER_KEYS = {"k_W_per_K": ("Real", "W/K"), "isothermal": ("Boolean", None), "pneumatic_step_s": ("Real", "s")}
+PARAMETER_KEYS = {"k_W_per_K": ("Real", "W/K"), "isothermal": ("Boolean", None), "pneumatic_step_s": ("Real", "s"),
+                  "lookahead": ("Boolean", None), "macro_step_s": ("Real", "s")}
+#: calculated parameters a map may name: the sub-step the FMU uses (the importer gives every case
+#: the shortest of every k's, as a native run does: ``pneumatic_step_s`` must be mapped too)
+CALCULATED_KEYS = {"pneumatic_step_used_s": "s"}
+#: what the master's own exchange needs of an FMU (all or none): per bellow, the crushing and rate
+#: at the step's end in, the stiffness and the force's rate at frozen crushing out; the switch
+#: that makes the FMU follow the crushing to the step's end, and the step of the force's rate
+NATIVE_BELLOW_KEYS = ("crushing_end", "rate_end", "stiffness", "force_rate")
+NATIVE_PARAMETER_KEYS = ("lookahead", "macro_step_s")
 
 #: the model identifier of the FMUs ``pneumorail fmu`` exports (cosim.fmi.slave.PneumorailCircuit)
 PNEUMORAIL_IDENTIFIER = "PneumorailCircuit"
@@ -42,13 +53,19 @@ def installed_version() -> str:
         return "not installed"
 
 
-def pneumorail_map() -> dict:
-    """The map of an FMU ``pneumorail fmu`` exported (its variable names: docs/fmi.md)."""
+def pneumorail_map(native: bool = True) -> dict:
+    """The map of an FMU ``pneumorail fmu`` exported (its variable names: docs/fmi.md); ``native``:
+    with the variables of the master's own exchange (an FMU exported before they existed has none)."""
+    extra = ({"crushing_end": "z_end_m", "rate_end": "zdot_end_m_per_s", "stiffness": "K_N_per_m",
+              "force_rate": "dFdt_N_per_s"} if native else {})
     return {**{b: {"crushing": f"bellow_{b}.z_m", "rate": f"bellow_{b}.zdot_m_per_s", "force": f"bellow_{b}.F_N",
-                   "pressure": f"bellow_{b}.p_Pa", "temperature": f"bellow_{b}.T_K"} for b in BELLOWS},
+                   "pressure": f"bellow_{b}.p_Pa", "temperature": f"bellow_{b}.T_K",
+                   **{key: f"bellow_{b}.{name}" for key, name in extra.items()}} for b in BELLOWS},
             "air": {"total_mass_kg": "total_air_mass_kg", "air_from_supply_kg": "air_injected_kg",
                     "air_to_atmosphere_kg": "air_exhausted_kg"},
-            "k_W_per_K": "k_W_per_K", "isothermal": "isothermal", "pneumatic_step_s": "pneumatic_step_s"}
+            "k_W_per_K": "k_W_per_K", "isothermal": "isothermal", "pneumatic_step_s": "pneumatic_step_s",
+            **({"lookahead": "lookahead", "macro_step_s": "macro_step_s",
+                "pneumatic_step_used_s": "pneumatic_step_used_s"} if native else {})}
 
 
 @dataclass(frozen=True)
@@ -62,6 +79,10 @@ class BellowMap:
     force: str
     pressure: Optional[str] = None
     temperature: Optional[str] = None
+    crushing_end: Optional[str] = None
+    rate_end: Optional[str] = None
+    stiffness: Optional[str] = None
+    force_rate: Optional[str] = None
 
 
 @dataclass(frozen=True)
@@ -79,8 +100,17 @@ class ImportedCircuit:
     k_W_per_K: Optional[str] = None
     isothermal: Optional[str] = None
     pneumatic_step_s: Optional[str] = None
+    lookahead: Optional[str] = None
+    macro_step_s: Optional[str] = None
+    pneumatic_step_used_s: Optional[str] = None
     valves: bool = False
     faults: tuple = ()
+
+    @property
+    def native_exchange(self) -> bool:
+        """The FMU takes the master's own exchange (docs/fmi.md): the crushing at both ends of
+        the step in, the force law's stiffness and rate out."""
+        return self.lookahead is not None
 
     def components(self) -> dict:
         """None of pneumorail's: the circuit is inside the FMU."""
@@ -134,12 +164,12 @@ def imported_circuit(data: Mapping, file) -> ImportedCircuit:
             raise ScenarioError(file, P + ["map"], f"expected a mapping (FL: {{crushing: ..., rate: ..., force: ...}}, "
                                                    f"...), got {describe(given)}")
     elif identifier == PNEUMORAIL_IDENTIFIER:
-        given = pneumorail_map()
+        given = pneumorail_map(native="lookahead" in variables)
     else:
         raise ScenarioError(file, P + ["map"], f"{str(path)!r} (model {identifier!r}) is not an FMU pneumorail exported: "
                                                f"give the map of its variables to the bellows (docs/fmi.md)")
     M = P + ["map"]
-    check_keys(given, (*BELLOWS, "air", *PARAMETER_KEYS), file, M)
+    check_keys(given, (*BELLOWS, "air", *PARAMETER_KEYS, *CALCULATED_KEYS), file, M)
 
     def variable(key_path, var_name, causality, unit, type_="Real") -> str:
         var_name = coerce(var_name, str, file, key_path)
@@ -184,9 +214,27 @@ def imported_circuit(data: Mapping, file) -> ImportedCircuit:
     air_map = tuple((key, variable(M + ["air", key], air[key], "output", "kg")) for key in AIR_KEYS if key in air)
     parameters = {key: variable(M + [key], given[key], "parameter", unit, type_)
                   for key, (type_, unit) in PARAMETER_KEYS.items() if given.get(key) is not None}
+    parameters.update({key: variable(M + [key], given[key], "calculatedParameter", unit)
+                       for key, unit in CALCULATED_KEYS.items() if given.get(key) is not None})
+    if "pneumatic_step_used_s" in parameters and "pneumatic_step_s" not in parameters:
+        raise ScenarioError(file, M + ["pneumatic_step_s"], "pneumatic_step_used_s is mapped: map the parameter it "
+                                                            "comes from too (the importer sets it)")
+    _check_all_or_none(given, file, M)
     valves = coerce(data.get("valves", "valves connected" in (md.description or "")), bool, file, P + ["valves"])
     return ImportedCircuit(str(path.resolve()), hashlib.sha256(path.read_bytes()).hexdigest(), identifier, md.guid,
                            tuple(bellows), air_map, valves=valves, **parameters)
+
+
+def _check_all_or_none(given: Mapping, file, M) -> None:
+    """The master's own exchange needs every one of its variables (:data:`NATIVE_BELLOW_KEYS` of
+    each bellow, :data:`NATIVE_PARAMETER_KEYS`), or none of them."""
+    wanted = [[b, key] for b in BELLOWS for key in NATIVE_BELLOW_KEYS] + [[key] for key in NATIVE_PARAMETER_KEYS]
+    given_paths = [p for p in wanted if (given[p[0]].get(p[1]) if len(p) == 2 else given.get(p[0])) is not None]
+    if given_paths and len(given_paths) < len(wanted):
+        missing = next(p for p in wanted if p not in given_paths)
+        raise ScenarioError(file, M + missing, f"the master's own exchange ({', '.join(given_paths[0])} is mapped) needs "
+                                               f"{', '.join(NATIVE_BELLOW_KEYS)} of every bellow and "
+                                               f"{', '.join(NATIVE_PARAMETER_KEYS)}: map them all, or none")
 
 
 def check_imported_ks(circuit: ImportedCircuit, ks, file) -> None:
