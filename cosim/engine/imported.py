@@ -1,22 +1,23 @@
 """An FMU as a car's circuit (``circuit: {fmu: ...}``, :mod:`cosim.scenario.imported`): FMPy runs
 it (FMI 2.0 co-simulation), one instance per case, and :class:`ImportedCoSimulation` gives the
-co-simulation master's macro-step exchange around it.
+co-simulation master's macro-step exchange around it, in one of two ways (docs/fmi.md):
 
-What differs from the native circuit (:class:`cosim.engine.master.CoSimulation`), because an FMU
-gives its outputs at communication points only:
+* **the master's own exchange**, with an FMU that gives what it needs (pneumorail's does): the
+  force law of the step (``linearised`` or ``explicit``) built from the FMU's force, stiffness and
+  force rate at t_n as :meth:`CoSimulation._force_laws` builds it from its circuit; the FMU given
+  the crushing and rate at both ends of the step (it follows the master's cubic Hermite between
+  them) and, for every case, the shortest pneumatic sub-step of all the scenario's k values. The
+  native run to the last bit;
+* **the force held**, with an FMU that gives its force only: the forces it gave at t_n held over
+  the macro-step (as ``coupling: explicit``: without dF/dz and the force's rate the linearised
+  law cannot be built), the FMU given the crushing and rate at t_n (within the step it follows
+  its own inputs). First order in the macro-step.
 
-* the force law: the bellow forces the FMU gave at t_n are held over the macro-step (as the
-  master's ``coupling: explicit``): the FMU gives neither dF/dz at constant air mass (no
-  directional derivatives) nor its force's rate at frozen crushing (no state to roll back), so
-  the ``linearised`` law cannot be built; the coupling is first order in the macro-step;
-* the crushing: the FMU is given the crushing and its rate at t_n, and steps to t_n + H; what
-  it does within the step is its own (pneumorail's FMU extrapolates them, docs/fmi.md), not the
-  master's cubic Hermite between t_n and t_n + H;
-* what the record holds: the force, and the pressure, temperature and air totals the map names
-  (NaN where it names none); no flows through links, no valve accounts (those outputs are left
-  out), no faults' air nor net inflow (NaN), and so no mass balance (NaN);
-* a step the FMU refuses (fmi2Discard, fmi2Error, fmi2Fatal) stops that case with a diagnosis,
-  as a diverged circuit does: its record holds NaN from then on, the others go on, the run exits 1.
+Either way, what the record holds: the force, and the pressure, temperature and air totals the map
+names (NaN where it names none); no flows through links, no valve accounts (those outputs are left
+out), no faults' air nor net inflow (NaN), and so no mass balance (NaN). A step the FMU refuses
+(fmi2Discard, fmi2Error, fmi2Fatal) stops that case with a diagnosis, as a diverged circuit does:
+its record holds NaN from then on, the others go on, the run exits 1.
 """
 from __future__ import annotations
 

@@ -15,6 +15,13 @@ changes as the compression work says); the crushing it reaches at t_{k+1} is off
 sample by O(h^3), so the result is second order in the communication step h (a plain linear
 extrapolation, a_k = 0, is first order: 20 times the error at h = 10 ms in the tests).
 
+With the parameter ``lookahead`` true the step follows instead the co-simulation master's own
+motion, the cubic Hermite from (z_k, zdot_k) to the inputs ``z_end_m``, ``zdot_end_m_per_s`` given
+for t_{k+1} (a master that advances the mechanics first knows them), and the outputs are at those
+end values; with the stiffness and the force's rate at frozen crushing (outputs in either mode)
+the master builds its linearised force law, and the FMU is then its native circuit exactly
+(:mod:`cosim.engine.imported`).
+
 Each communication step is integrated by :func:`pneumatics.integrate.advance` (RK4 in equal
 sub-steps no longer than ``pneumatic_step_s``), so any communication step size is accepted.
 """

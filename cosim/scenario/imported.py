@@ -8,7 +8,8 @@ file exists and is a zip with a ``modelDescription.xml``; it is FMI 2.0 with co-
 model-exchange-only FMU is refused); the map has one entry per bellow of the car; every mapped
 variable exists, is a Real (``isothermal``: a Boolean) of the right causality (the crushing and
 its rate inputs, the force and what is recorded outputs, k and the step parameters) and, when the
-FMU declares a unit, of the unit expected."""
+FMU declares a unit, of the unit expected; the variables of the master's own exchange
+(:data:`NATIVE_BELLOW_KEYS`, :data:`NATIVE_PARAMETER_KEYS`) all mapped or none."""
 from __future__ import annotations
 
 import hashlib
