@@ -50,7 +50,7 @@ class FmuCircuit:
         from fmpy.fmi2 import FMU2Slave
         md = read_model_description(unzipped)
         ref = {v.name: v.valueReference for v in md.modelVariables}
-        self.spec = spec
+        self.spec, self.scenario_file = spec, scenario_file
         self.native = spec.native_exchange
         ends = ("crushing", "rate", "crushing_end", "rate_end") if self.native else ("crushing", "rate")
         self.inputs = [ref[getattr(b, key)] for key in ends for b in spec.bellows]
@@ -91,12 +91,16 @@ class FmuCircuit:
     def start(self, t0: float, z: np.ndarray, zd: np.ndarray) -> None:
         """Parameters and the crushing at ``t0`` set, initialised; the outputs at t0 read."""
         s = self.slave
-        s.setupExperiment(startTime=t0)
-        s.enterInitializationMode()
-        for type_, vr, value in self._parameters:
-            (s.setBoolean if type_ == "Boolean" else s.setReal)([vr], [value])
-        s.setReal(self.inputs, self._values(z, zd, z, zd))
-        s.exitInitializationMode()
+        try:
+            s.setupExperiment(startTime=t0)
+            s.enterInitializationMode()
+            for type_, vr, value in self._parameters:
+                (s.setBoolean if type_ == "Boolean" else s.setReal)([vr], [value])
+            s.setReal(self.inputs, self._values(z, zd, z, zd))
+            s.exitInitializationMode()
+        except FMICallException as exc:
+            raise ScenarioError(self.scenario_file, ["circuit", "fmu"], f"the FMU {self.spec.fmu} could not be "
+                                                                        f"initialised: {exc}") from None
         self._sample()
 
     def step(self, t: float, H: float, z: np.ndarray, zd: np.ndarray, z1: np.ndarray, zd1: np.ndarray) -> None:
@@ -205,8 +209,12 @@ class ImportedCoSimulation(CoSimulation):
         self._watch_every = max(1, round(StateWatch.INTERVAL_S / macro_step_s))
         self._steps = 0
         self._unzipped = unzipped
-        for j, fmu in enumerate(self.fmus):
-            fmu.start(0.0, self.z[:, j], self.zd[:, j])
+        try:
+            for j, fmu in enumerate(self.fmus):
+                fmu.start(0.0, self.z[:, j], self.zd[:, j])
+        except ScenarioError:
+            self.close()
+            raise
         self._F = self._law()[0]
         self._F_end = None  # with the native exchange: the forces the cars feel at the end of the last step
 
@@ -240,6 +248,7 @@ class ImportedCoSimulation(CoSimulation):
                 reason = self.watch.car(j, self.cars[j], t1)
                 if reason:
                     self._stop(j, f"impossible state: {reason}")
+            z1[:, ~self.active], zd1[:, ~self.active] = self.z[:, ~self.active], 0.0
         for j in np.flatnonzero(self.active):
             try:
                 self.fmus[j].step(self.t, self.H, self.z[:, j], self.zd[:, j], z1[:, j], zd1[:, j])
@@ -308,7 +317,10 @@ def build_imported(scenario, k_values: Sequence[float], cars: Sequence, labels: 
             fmus.append(FmuCircuit(spec, unzipped, k, h, settings.macro_step_s, f"{scenario.name}_{j}", scenario.file))
     except ScenarioError:
         for fmu in fmus:
-            fmu.close()
+            try:
+                fmu.close()
+            except FMICallException:
+                pass
         shutil.rmtree(unzipped, ignore_errors=True)
         raise
     return ImportedCoSimulation(cars, fmus, scenario.solver.macro_step_s, labels, watch, extra_outputs, unzipped,

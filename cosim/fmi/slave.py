@@ -123,6 +123,7 @@ class PneumorailCircuit(Fmi2Slave):
         self._circuit = None
         self._x = None
         self._previous_rate = None
+        self._rate = (None, None, None)     # (z, zdot, d(state)/dt) of the last outputs
         self._h = self.pneumatic_step_s
 
         def indexed(values, i):
@@ -238,7 +239,11 @@ class PneumorailCircuit(Fmi2Slave):
 
             def motion(t):
                 return z0 + (t - t0) * (zd0 + 0.5 * (t - t0) * a), zd0 + (t - t0) * a
-        self._x = advance(self._circuit, self._x, t0, t1, motion, self._h)
+        # the state's rate at the step's start is known when the outputs were sampled at these very
+        # inputs (a master's crushing at t_k is what it gave as the previous step's end: lookahead)
+        z_s, zd_s, rate = self._rate
+        rate0 = rate if np.array_equal(z_s, z0) and np.array_equal(zd_s, zd0) else None
+        self._x = advance(self._circuit, self._x, t0, t1, motion, self._h, rate0=rate0)
         self._previous_rate = (t0, zd0)
         self._sample(z1, zd1)
         return True
@@ -248,11 +253,13 @@ class PneumorailCircuit(Fmi2Slave):
         inputs are left as the importer set them). The stiffness and the force's rate at frozen
         crushing are those of the co-simulation master's linearised force law (cosim.engine.master)."""
         circuit, x = self._circuit, self._x
-        out = circuit.outputs(x, z_m)
+        evaluated = circuit.evaluate(x, z_m)
+        out = circuit.outputs(x, z_m, evaluated)
         chambers = [circuit.chamber_names.index(b) for b in self.bellows]
         self.F_N[:] = out.bellow_force_N.tolist()
         F = circuit.bellow_forces_N(x, z_m)
-        _, held = circuit.derivatives_and_held(x, z_m, zdot_m_per_s)
+        rate, held = circuit.derivatives_and_held(x, z_m, zdot_m_per_s, evaluated)
+        self._rate = (np.array(z_m, dtype=float), np.array(zdot_m_per_s, dtype=float), rate)
         half = 0.5 * self.macro_step_s
         self.dFdt_N_per_s[:] = ((circuit.bellow_forces_N(x + half * held, z_m) - F) / half).tolist()
         self.K_N_per_m[:] = circuit.bellow_stiffness_N_per_m(x, z_m).tolist()
