@@ -91,7 +91,10 @@ of every scenario: `kind`, `name`, `description`, `k_W_per_K` (a list; `.inf` is
 `yq_2m_p9985[zone=R<250] <= 1.2`; docs/assessment.md).
 The rig kinds ({rig}) take `circuit: {{bellow, tank, pipe, p0_Pa}}` (`p0_Pa`: {p0}) and `test`; the car kinds
 ({car}) take `vehicle`, `track`, `circuit` (`layout: four_point | two_point`, `valves`, the
-sections below, or an explicit `components:` mapping of named components with a `type`),
+sections below, an explicit `components:` mapping of named components with a `type`, or an FMU:
+`fmu: FILE.fmu` with `map:` its variables per bellow (`FL: {{crushing, rate, force, pressure,
+temperature, crushing_end, rate_end, stiffness, force_rate}}`, ...), `air`, `k_W_per_K`, `isothermal`,
+`pneumatic_step_s`, `pneumatic_step_used_s`, `lookahead`, `macro_step_s`, and `valves`; docs/fmi.md),
 `solver`, `verify`, `state_limits`, `faults`, `payload` and their experiment ({sections}).
 """
 

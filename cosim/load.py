@@ -21,6 +21,7 @@ from cosim.engine.master import COUPLINGS
 from cosim.errors import ScenarioError
 from cosim.scenario.checks import parse_checks
 from cosim.scenario.circuits import InitialAir, car_circuit, check_initial_state, parse_faults
+from cosim.scenario.imported import check_imported_ks, imported_circuit
 from cosim.scenario.model import (
     DEFAULT_TRACK_MODEL,
     DEFAULT_TRACK_PRESET,
@@ -152,29 +153,40 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
     vehicle = _vehicle(data.get("vehicle"), path)
     car = _check_car_builds(vehicle, data.get("vehicle"), path)
     track = _track_structure(data.get("track"), path)
-    circuit = car_circuit(require(data, "circuit", path, [], dict), path)
+    circuit_data = require(data, "circuit", path, [], dict)
+    imported = "fmu" in circuit_data
+    circuit = imported_circuit(circuit_data, path) if imported else car_circuit(circuit_data, path)
     solver = build(SolverSettings, data.get("solver"), path, ["solver"])
     if solver.coupling not in COUPLINGS:
         raise ScenarioError(path, ["solver", "coupling"], f"expected one of {', '.join(COUPLINGS)}, got {solver.coupling!r}")
     experiment = kind.parse(data.get(kind.section), vehicle, path)
     valve_settings = kind.valve_settings(experiment, circuit.valves)
-    if circuit.explicit is not None:
-        # an explicit circuit has no valves switch: its valves are what its components are
+    if imported:
+        refused = kind.refuse_imported_circuit(experiment)
+        if refused:
+            raise ScenarioError(path, ["circuit", "fmu"], refused)
+        check_imported_ks(circuit, common["k_W_per_K"], path)
+    if imported or circuit.explicit is not None:
+        # an explicit or imported circuit has no valves switch: its valves are what its components are
         given = (data.get(kind.section) or {}).get("valve_settings")
         if given is not None and tuple(valve_settings) != (circuit.valves,):
             has = "has levelling valves" if circuit.valves else "has no levelling valve"
-            raise ScenarioError(path, [kind.section, "valve_settings"], f"an explicit circuit (circuit.components) "
-                                                                        f"{has}: leave valve_settings out, or give "
-                                                                        f"[{str(circuit.valves).lower()}]")
+            what = "an FMU circuit (circuit.fmu; circuit.valves says whether it has valves)" if imported else \
+                "an explicit circuit (circuit.components)"
+            raise ScenarioError(path, [kind.section, "valve_settings"], f"{what} {has}: leave valve_settings out, or "
+                                                                        f"give [{str(circuit.valves).lower()}]")
         valve_settings = (circuit.valves,)
         experiment = dataclasses.replace(experiment, valve_settings=valve_settings)
     _check_steps(solver, kind.duration_s(experiment), path)
     refused = kind.refuse_faults(experiment) if data.get("faults") else None
+    if imported and data.get("faults"):
+        refused = "an FMU circuit cannot be faulted from the scenario (its components are inside the FMU)"
     if refused:
         raise ScenarioError(path, ["faults"], refused)
     shortest = kind.shortest_duration_s(experiment)   # every case sees every fault
-    circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit, shortest,
-                                                               valve_settings))
+    if not imported:
+        circuit = dataclasses.replace(circuit, faults=parse_faults(data.get("faults"), path, circuit, shortest,
+                                                                   valve_settings))
     refused = kind.refuse_payload(experiment) if data.get("payload") else None
     if refused:
         raise ScenarioError(path, ["payload"], refused)
@@ -182,7 +194,8 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
     experiment = kind.with_payload(experiment, payload, path)
     if payload is not None:       # the car starts carrying its payload at arrival: the bellows' pressures follow
         car = _check_car_builds(vehicle, data.get("vehicle"), path, payload)
-    air = check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)
+    # an FMU's initial air is its own, known once it runs
+    air = () if imported else check_initial_state(circuit, car, common["k_W_per_K"], valve_settings, path)
     verify = build(VerifySettings, data.get("verify"), path, ["verify"])
     state_limits = _state_limits(data.get("state_limits"), path, air)
     checks = parse_checks(data.get("checks", []), kind, experiment, path, common["k_W_per_K"], valve_settings)

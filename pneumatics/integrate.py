@@ -24,6 +24,21 @@ from .errors import CircuitError
 Motion = Callable[[float], Tuple[np.ndarray, np.ndarray]]
 
 
+def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1):
+    """Cubic Hermite interpolation of the crushing over [t0, t1]: matches z and dz/dt at both ends
+    (the co-simulation master's motion over a macro-step; the exported FMU's with ``lookahead``)."""
+    H = t1 - t0
+    dz = z1 - z0
+
+    def motion(t):
+        s = (t - t0) / H
+        s2, s3 = s * s, s * s * s
+        z = z0 + (3 * s2 - 2 * s3) * dz + (s - 2 * s2 + s3) * H * zd0 + (s3 - s2) * H * zd1
+        zd = (6 * s - 6 * s2) * dz / H + (1 - 4 * s + 3 * s2) * zd0 + (3 * s2 - 2 * s) * zd1
+        return z, zd
+    return motion
+
+
 def stable_step_s(circuit: Circuit, x: np.ndarray, h_max_s: float = 1e-3, courant: float = 1.5) -> float:
     """A fixed RK4 step that keeps the thermal relaxation stable: h <= courant / max(k / (m c_v)).
 

@@ -14,6 +14,7 @@ from cosim.interrupts import install_in_worker
 from cosim.limits.watch import StateWatch
 from cosim.results.io import Progress
 from cosim.results.series import car_dataset, concat_cases
+from cosim.scenario.imported import is_imported
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import k_label
 from pneumatics.integrate import stable_step_s
@@ -36,6 +37,10 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
     :data:`~cosim.engine.master.OUTPUTS`."""
     settings = scenario.solver
     cars = [make_car(scenario) for _ in k_values]
+    if is_imported(scenario.circuit):
+        from cosim.engine.imported import build_imported
+        return build_imported(scenario, k_values, cars, [f"k = {k_label(k)} W/K" for k in k_values],
+                              StateWatch(scenario.state_limits, len(k_values), cars[0].bellow_height_m), extra_outputs)
     components = scenario.circuit.components()
     circuit = scenario.circuit.compile(np.asarray(k_values, dtype=float))
     if tuple(circuit.bellow_names) != BELLOWS:
@@ -54,7 +59,11 @@ def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]
     scenario, k_values, make_car, duration_s, label, extra_outputs = args
     cosim = build_cosimulation(scenario, k_values, make_car, extra_outputs)
     progress = Progress(f"{label} k={','.join(k_label(k) for k in sorted(k_values))}") if label else None
-    record, diagnosis = cosim.run(duration_s, scenario.solver.output_interval_s, progress)
+    try:
+        record, diagnosis = cosim.run(duration_s, scenario.solver.output_interval_s, progress)
+    finally:
+        if is_imported(scenario.circuit):
+            cosim.close()
     return record.arrays(), diagnosis, list(k_values)
 
 
@@ -106,7 +115,7 @@ def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, durati
     shares = _worker_shares([v.k_W_per_K for v in variants], variants[0].solver.jobs)
     tasks = [[(variants[v], ks, make_car, durations_s[v], labels[v], tuple(extra_outputs)) for v, ks in share]
              for share in shares]
-    if len(tasks) == 1:
+    if len(tasks) == 1 and not any(is_imported(v.circuit) for v in variants):
         done = [_run_chunks(tasks[0])]
     else:
         with ProcessPoolExecutor(len(tasks), initializer=install_in_worker) as pool:
@@ -155,9 +164,10 @@ def simulate_scenarios(scenarios: Sequence[Scenario], settings: Sequence[Optiona
     for i in range(len(scenarios)):
         datasets, diagnoses = [], []
         for variant, (chunks, diag) in zip(variants[i * n:(i + 1) * n], results[i * n:(i + 1) * n]):
-            circuit = variant.circuit.compile()
+            circuit = None if is_imported(variant.circuit) else variant.circuit.compile()   # an FMU's: no links, valves
+            links, valve_names = (circuit.link_names, circuit.valve_names) if circuit else ((), ())
             valves = variant.circuit.valves
-            parts = [car_dataset(arrays, (*OUTPUTS, *extra_outputs), ks, valves, named, circuit.link_names, circuit.valve_names)
+            parts = [car_dataset(arrays, (*OUTPUTS, *extra_outputs), ks, valves, named, links, valve_names)
                      for ks, arrays in chunks]
             ds = concat_cases(parts)
             datasets.append(ds.isel(case=np.argsort(ds["k_W_per_K"].values, kind="stable")))  # inf sorts last

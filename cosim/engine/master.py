@@ -45,24 +45,10 @@ import numpy as np
 from cosim.interrupts import stop_requested
 from cosim.limits.watch import StateWatch
 from pneumatics.circuit import Circuit, CircuitDiverged
-from pneumatics.integrate import advance, stable_step_s
+from pneumatics.integrate import advance, hermite_motion, stable_step_s
 from vehicle.errors import Derailed
 
 COUPLINGS = ("linearised", "explicit")
-
-
-def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1):
-    """Cubic Hermite interpolation of the crushing over [t0, t1]: matches z and dz/dt at both ends."""
-    H = t1 - t0
-    dz = z1 - z0
-
-    def motion(t):
-        s = (t - t0) / H
-        s2, s3 = s * s, s * s * s
-        z = z0 + (3 * s2 - 2 * s3) * dz + (s - 2 * s2 + s3) * H * zd0 + (s3 - s2) * H * zd1
-        zd = (6 * s - 6 * s2) * dz / H + (1 - 4 * s + 3 * s2) * zd0 + (3 * s2 - 2 * s) * zd1
-        return z, zd
-    return motion
 
 
 @dataclass(frozen=True)

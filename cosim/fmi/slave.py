@@ -15,6 +15,13 @@ changes as the compression work says); the crushing it reaches at t_{k+1} is off
 sample by O(h^3), so the result is second order in the communication step h (a plain linear
 extrapolation, a_k = 0, is first order: 20 times the error at h = 10 ms in the tests).
 
+With the parameter ``lookahead`` true the step follows instead the co-simulation master's own
+motion, the cubic Hermite from (z_k, zdot_k) to the inputs ``z_end_m``, ``zdot_end_m_per_s`` given
+for t_{k+1} (a master that advances the mechanics first knows them), and the outputs are at those
+end values; with the stiffness and the force's rate at frozen crushing (outputs in either mode)
+the master builds its linearised force law, and the FMU is then its native circuit exactly
+(:mod:`cosim.engine.imported`).
+
 Each communication step is integrated by :func:`pneumatics.integrate.advance` (RK4 in equal
 sub-steps no longer than ``pneumatic_step_s``), so any communication step size is accepted.
 """
@@ -36,6 +43,7 @@ SPEC_FILE = "circuit.pickle"
 UNITS = {
     "m": {"m": 1}, "m/s": {"m": 1, "s": -1}, "N": {"kg": 1, "m": 1, "s": -2}, "Pa": {"kg": 1, "m": -1, "s": -2},
     "K": {"K": 1}, "kg": {"kg": 1}, "W/K": {"kg": 1, "m": 2, "s": -3, "K": -1}, "s": {"s": 1},
+    "N/m": {"kg": 1, "s": -2}, "N/s": {"kg": 1, "m": 1, "s": -3},
 }
 
 
@@ -96,19 +104,26 @@ class PneumorailCircuit(Fmi2Slave):
         n = len(self.bellows)
         self.z_m = [0.0] * n
         self.zdot_m_per_s = [0.0] * n
+        self.z_end_m = [0.0] * n
+        self.zdot_end_m_per_s = [0.0] * n
         self.F_N = [0.0] * n
+        self.K_N_per_m = [0.0] * n
+        self.dFdt_N_per_s = [0.0] * n
         self.p_Pa = [0.0] * n
         self.T_K = [0.0] * n
         self.p0_Pa = [float(spec["p0_Pa"][b]) for b in self.bellows]
         self.k_W_per_K = float(spec["k_W_per_K"])
         self.isothermal = bool(spec["isothermal"])
         self.pneumatic_step_s = float(spec["pneumatic_step_s"])
+        self.lookahead = False
+        self.macro_step_s = float(spec["default_experiment"][2])
         self.total_air_mass_kg = 0.0
         self.air_injected_kg = 0.0
         self.air_exhausted_kg = 0.0
         self._circuit = None
         self._x = None
         self._previous_rate = None
+        self._rate = (None, None, None)     # (z, zdot, d(state)/dt) of the last outputs
         self._h = self.pneumatic_step_s
 
         def indexed(values, i):
@@ -117,7 +132,15 @@ class PneumorailCircuit(Fmi2Slave):
         for name, unit, values, causality, text in (
                 ("z_m", "m", self.z_m, Fmi2Causality.input, "crushing z (+ in compression) of bellow {}"),
                 ("zdot_m_per_s", "m/s", self.zdot_m_per_s, Fmi2Causality.input, "crushing rate dz/dt of bellow {}"),
+                ("z_end_m", "m", self.z_end_m, Fmi2Causality.input, "crushing of bellow {} at the end of the "
+                                                                    "communication step (used with lookahead)"),
+                ("zdot_end_m_per_s", "m/s", self.zdot_end_m_per_s, Fmi2Causality.input,
+                 "crushing rate of bellow {} at the end of the communication step (used with lookahead)"),
                 ("F_N", "N", self.F_N, Fmi2Causality.output, "force of bellow {} (eq. 4, + pushing the plates apart)"),
+                ("K_N_per_m", "N/m", self.K_N_per_m, Fmi2Causality.output,
+                 "stiffness dF/dz of bellow {} at constant air mass (adiabatic; isothermal at k = inf)"),
+                ("dFdt_N_per_s", "N/s", self.dFdt_N_per_s, Fmi2Causality.output,
+                 "rate of the force of bellow {} at frozen crushing (an Euler step of macro_step_s / 2)"),
                 ("p_Pa", "Pa", self.p_Pa, Fmi2Causality.output, "pressure of bellow {} (absolute)"),
                 ("T_K", "K", self.T_K, Fmi2Causality.output, "air temperature of bellow {}")):
             for i, b in enumerate(self.bellows):
@@ -146,6 +169,20 @@ class PneumorailCircuit(Fmi2Slave):
                                        variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
                                        description="k = infinity: every chamber held at the atmosphere's "
                                                    "temperature (k_W_per_K is then ignored)"))
+        self.register_variable(Boolean("lookahead", causality=Fmi2Causality.parameter,
+                                       variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
+                                       description="true: each step follows the cubic Hermite from the crushing and "
+                                                   "rate at its start to those at its end (z_end_m, zdot_end_m_per_s), "
+                                                   "a master that advances the mechanics first; false: it extrapolates"))
+        self.register_variable(UnitReal("macro_step_s", "s", causality=Fmi2Causality.parameter,
+                                        variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
+                                        description="the step over which dFdt_N_per_s is taken (an Euler step of half "
+                                                    "of it at zero crushing rate; default: the default experiment's)"))
+        self.register_variable(UnitReal("pneumatic_step_used_s", "s", causality=Fmi2Causality.calculatedParameter,
+                                        variability=Fmi2Variability.fixed, initial=Fmi2Initial.calculated,
+                                        getter=lambda: self._h,
+                                        description="the RK4 sub-step bound in use: pneumatic_step_s, shortened at "
+                                                    "initialisation if k needs it"))
         self.register_variable(UnitReal("pneumatic_step_s", "s", causality=Fmi2Causality.parameter,
                                         variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
                                         description="longest RK4 step of the air within a communication step (shortened at "
@@ -165,11 +202,14 @@ class PneumorailCircuit(Fmi2Slave):
         for key in ("scenario_file", "scenario_sha256", "scenario_name", "pneumorail_version"):
             tool.set(key, str(self.spec[key]))
         root.insert(list(root).index(root.find("ModelVariables")), annotations)
-        # every output is calculated at initialisation (FMI 2.0: listed as an initial unknown)
+        # every output is calculated at initialisation (FMI 2.0: listed as an initial unknown),
         structure = root.find("ModelStructure")
+        # and so is every calculated parameter; listed by index, as FMI 2.0 orders them
         initial = SubElement(structure, "InitialUnknowns")
-        for unknown in structure.find("Outputs"):
-            SubElement(initial, "Unknown", index=unknown.get("index"))
+        calculated = [i + 1 for i, v in enumerate(root.find("ModelVariables"))
+                      if v.get("causality") == "calculatedParameter"]
+        for index in sorted([int(u.get("index")) for u in structure.find("Outputs")] + calculated):
+            SubElement(initial, "Unknown", index=str(index))
         return root
 
     # -- the simulation ----------------------------------------------------------------------------
@@ -184,26 +224,45 @@ class PneumorailCircuit(Fmi2Slave):
         self._x = self._circuit.initial_state(pressures_at_rest(components, dict(zip(self.bellows, self.p0_Pa))))
         # k may have been raised since the export: its thermal rate may need a shorter step
         self._h = stable_step_s(self._circuit, self._x, self.pneumatic_step_s)
-        self._sample(np.array(self.z_m))
+        self._sample(np.array(self.z_m), np.array(self.zdot_m_per_s))
 
     def do_step(self, current_time: float, step_size: float) -> bool:
-        from pneumatics.integrate import advance
-        t0 = current_time
+        from pneumatics.integrate import advance, hermite_motion
+        t0, t1 = current_time, current_time + step_size
         z0, zd0 = np.array(self.z_m), np.array(self.zdot_m_per_s)
-        a = extrapolation_acceleration(zd0, t0, self._previous_rate)
-        self._x = advance(self._circuit, self._x, t0, t0 + step_size,
-                          lambda t: (z0 + (t - t0) * (zd0 + 0.5 * (t - t0) * a), zd0 + (t - t0) * a), self._h)
+        if self.lookahead:
+            z1, zd1 = np.array(self.z_end_m), np.array(self.zdot_end_m_per_s)
+            motion = hermite_motion(t0, t1, z0, zd0, z1, zd1)
+        else:
+            a = extrapolation_acceleration(zd0, t0, self._previous_rate)
+            z1, zd1 = z0 + step_size * (zd0 + 0.5 * step_size * a), zd0 + step_size * a
+
+            def motion(t):
+                return z0 + (t - t0) * (zd0 + 0.5 * (t - t0) * a), zd0 + (t - t0) * a
+        # the state's rate at the step's start is known when the outputs were sampled at these very
+        # inputs (a master's crushing at t_k is what it gave as the previous step's end: lookahead)
+        z_s, zd_s, rate = self._rate
+        rate0 = rate if np.array_equal(z_s, z0) and np.array_equal(zd_s, zd0) else None
+        self._x = advance(self._circuit, self._x, t0, t1, motion, self._h, rate0=rate0)
         self._previous_rate = (t0, zd0)
-        self._sample(z0 + step_size * (zd0 + 0.5 * step_size * a))
+        self._sample(z1, zd1)
         return True
 
-    def _sample(self, z_m: np.ndarray) -> None:
-        """The outputs at the current state and crushing ``z_m`` (the inputs are left as the
-        importer set them)."""
+    def _sample(self, z_m: np.ndarray, zdot_m_per_s: np.ndarray) -> None:
+        """The outputs at the current state and crushing ``z_m``, rate ``zdot_m_per_s`` (the
+        inputs are left as the importer set them). The stiffness and the force's rate at frozen
+        crushing are those of the co-simulation master's linearised force law (cosim.engine.master)."""
         circuit, x = self._circuit, self._x
-        out = circuit.outputs(x, z_m)
+        evaluated = circuit.evaluate(x, z_m)
+        out = circuit.outputs(x, z_m, evaluated)
         chambers = [circuit.chamber_names.index(b) for b in self.bellows]
         self.F_N[:] = out.bellow_force_N.tolist()
+        F = circuit.bellow_forces_N(x, z_m)
+        rate, held = circuit.derivatives_and_held(x, z_m, zdot_m_per_s, evaluated)
+        self._rate = (np.array(z_m, dtype=float), np.array(zdot_m_per_s, dtype=float), rate)
+        half = 0.5 * self.macro_step_s
+        self.dFdt_N_per_s[:] = ((circuit.bellow_forces_N(x + half * held, z_m) - F) / half).tolist()
+        self.K_N_per_m[:] = circuit.bellow_stiffness_N_per_m(x, z_m).tolist()
         self.p_Pa[:] = out.p_Pa[chambers].tolist()
         self.T_K[:] = out.T_K[chambers].tolist()
         self.total_air_mass_kg = float(circuit.total_mass_kg(x))

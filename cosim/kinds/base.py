@@ -176,6 +176,11 @@ class CarKind(Kind):
         """Why the experiment cannot honour ``faults:`` (None: it runs them)."""
         return None
 
+    def refuse_imported_circuit(self, experiment: Any) -> Optional[str]:
+        """Why the experiment cannot run with an FMU as its circuit (``circuit.fmu``; None: it
+        runs it, through :func:`cosim.engine.cases.simulate_cases`)."""
+        return None
+
     def refuse_payload(self, experiment: Any) -> Optional[str]:
         """Why the experiment cannot honour ``payload:`` (None: it runs it; its ``make_car`` passes
         ``scenario.car_payload`` to the car)."""

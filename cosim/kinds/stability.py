@@ -267,6 +267,12 @@ def refuse_faults(test: StabilityTest) -> Optional[str]:
             "honour faults; run the faulted car on track (kind curve_entry or ride) instead")
 
 
+def refuse_imported_circuit(test: StabilityTest) -> Optional[str]:
+    """A stability analysis linearises the circuit's equations, which an FMU does not give."""
+    return ("a stability analysis linearises the circuit's own equations, which an FMU does not give (no "
+            "directional derivatives); run the car with the FMU on track (kind curve_entry or ride) instead")
+
+
 def refuse_check(metric: str, test: StabilityTest) -> Optional[str]:
     if metric == "nonlinear_critical_speed_m_per_s" and not test.nonlinear_speeds_m_per_s \
             and test.ramp_from_m_per_s is None:
@@ -788,6 +794,7 @@ class StabilityKind(CarKind):
     extra_files = staticmethod(extra_files)
     refuse_faults = staticmethod(refuse_faults)
     refuse_payload = staticmethod(refuse_payload)
+    refuse_imported_circuit = staticmethod(refuse_imported_circuit)
     refuse_check = staticmethod(refuse_check)
     refuse_limit = staticmethod(refuse_limit)
     make_car = staticmethod(make_car)
