@@ -26,6 +26,7 @@ from .chamber import (
     isothermal_heat_flow_W,
     temperature_rate_K_per_s,
 )
+from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
 from .orifice import orifice_flow_kg_per_s
 from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
@@ -126,9 +127,13 @@ class CircuitRuntime:
                                                      f"(chambers: {self.chamber_names})")
         lay = self.layout
         x = np.zeros(lay.size)
+        cells = {}
         for i, n in enumerate(self.chamber_names):
             c = self.components[n]
             p = p0_Pa.get(n, c.p_Pa if isinstance(c, Supply) else c.p0_Pa)
+            if p is None and isinstance(c, PipeCell):    # set from its pipe's ends, below
+                cells[i] = c
+                continue
             if p is None:
                 raise CircuitError([n, "p0_Pa"], "initial pressure is not set")
             if not p > 0:
@@ -138,12 +143,27 @@ class CircuitRuntime:
                 raise CircuitError([n, "T0_K"], "an isothermal (k = inf) chamber must start at the atmosphere's temperature")
             x[lay.T][i] = T
             x[lay.m][i] = self.gas.mass_kg(p, T, self._chambers.V0_m3[i, 0])
+        for i, c in cells.items():                 # a pipe's cell: between its ends' states
+            (p_a, T_a), (p_b, T_b) = (self._node_at_start(x, end) for end in c.ends)
+            p, T = p_a + c.position * (p_b - p_a), T_a + c.position * (T_b - T_a)
+            x[lay.T][i] = T
+            x[lay.m][i] = self.gas.mass_kg(p, T, self._chambers.V0_m3[i, 0])
         air = self._air
         if air.n_compressors:                      # each governor as its reservoir's pressure has it
             x[lay.governor] = self._governors(x[:, None], air.running_at_start)[:, 0]
         if n_cases is None and self.k_W_per_K.ndim:
             n_cases = self.k_W_per_K.size
         return x if n_cases is None else np.repeat(x[:, None], n_cases, axis=1)
+
+    def _node_at_start(self, x: np.ndarray, name: str) -> tuple:
+        """(p, T) of node ``name`` in the initial state ``x`` being built (a chamber's at its
+        nominal volume, a boundary node's given)."""
+        i = self._nodes.index[name]
+        nc = len(self.chamber_names)
+        if i >= nc:
+            return float(self._nodes.p_boundary_Pa[i - nc, 0]), float(self._nodes.T_boundary_K[i - nc, 0])
+        T = x[self.layout.T][i]
+        return self.gas.pressure_Pa(x[self.layout.m][i], T, self._chambers.V0_m3[i, 0]), T
 
     # ----------------------------------------------------------------------------- physics
     def _boundary(self, n_cases: int):
@@ -179,6 +199,11 @@ class CircuitRuntime:
         a, b = links.a, links.b
         w = np.empty((len(a), n_cases))
         w[self._pipes.links] = x2[lay.q]
+        ends = self._pipes.choked
+        if ends is not None:                               # compressible pipes' ends: choked flow
+            ia, ib = ends.a, ends.b
+            w[ends.rows] = choked_end_flow_kg_per_s(x2[lay.q][ends.rows], ends.area_m2, p_n[ia], T_n[ia], p_n[ib],
+                                                    T_n[ib], gas.R_J_per_kgK, gas.gamma)
         qs = self._quasi_steady
         if qs.count:
             ia, ib = a[qs.links], b[qs.links]
@@ -268,6 +293,8 @@ class CircuitRuntime:
         pa, pb = pipes.a, pipes.b
         dx[lay.q] = pipe_flow_rate_kg_per_s2(x2[lay.q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
                                              pipes.length_m, pipes.area_m2, pipes.loss_coefficient)  # eq. (5)
+        if pipes.reynolds is not None or pipes.choked is not None:
+            self._compressible_rates(dx[lay.q], x2[lay.q], p_n, T_n, rho_n, w)
         blocked_pipes = self._active.blocked_pipes
         if blocked_pipes is not None:                     # a blocked pipe's air column stands still
             dx[lay.q][blocked_pipes] = 0.0
@@ -285,6 +312,22 @@ class CircuitRuntime:
             dx[lay.compression_work] = np.concatenate([delivered * w_iso, delivered * w_ad])
         return dx, (m, T, p, mdot, Hdot, chain)
 
+    def _compressible_rates(self, dq: np.ndarray, q: np.ndarray, p_n, T_n, rho_n, w) -> None:
+        """Write the rates of the compressible pipes' links into ``dq``: eq. (5) with lambda of the
+        Reynolds number where the pipe's is null; at the ends, q relaxing towards the choked flow
+        w it passes in the link's acoustic time l / c (:mod:`pneumatics.compressible_pipe`)."""
+        gas = self.gas
+        fr = self._pipes.reynolds
+        if fr is not None:
+            ia, ib = fr.a, fr.b
+            dq[fr.rows] = segment_flow_rate_kg_per_s2(q[fr.rows], p_n[ia], p_n[ib], 0.5 * (rho_n[ia] + rho_n[ib]),
+                                                      fr.length_m, fr.area_m2, fr.zeta, fr.diameter_m, fr.viscosity_Pa_s)
+        ends = self._pipes.choked
+        if ends is not None:
+            q_end = q[ends.rows]
+            T_up = np.where(q_end >= 0.0, T_n[ends.a], T_n[ends.b])
+            dq[ends.rows] -= (q_end - w[ends.rows]) * np.sqrt(gas.gamma * gas.R_J_per_kgK * T_up) / ends.length_m
+
     def _write_crushing_rate_terms(self, dx: np.ndarray, x2: np.ndarray, terms, zdot2: np.ndarray) -> None:
         """Write the rows of d(state)/dt that the crushing rate enters: temperatures (eq. 2, with
         the heat flow of eq. 8 or the isothermal one), heat and work accumulators, valve signals."""
@@ -295,9 +338,16 @@ class CircuitRuntime:
         Qdot = heat_flow_into_W(heat.k_finite_W_per_K, T, self.atmosphere.T_K)   # eq. (8), physical sign
         if heat.any_isothermal:
             Qdot = np.where(heat.isothermal, isothermal_heat_flow_W(T, p, mdot, Hdot, Vdot, cv), Qdot)
+        cells = self._chambers.pipe_cells
+        if cells is not None:                              # compressible pipes' cells: adiabatic
+            Qdot = np.array(np.broadcast_to(Qdot, T.shape))
+            Qdot[cells] = 0.0
         dT = temperature_rate_K_per_s(m, T, p, mdot, Hdot, Qdot, Vdot, cv)       # eq. (2)
         if heat.any_isothermal:
+            dT_cells = dT[cells] if cells is not None else None
             dT = np.where(heat.isothermal, 0.0, dT)
+            if cells is not None:
+                dT[cells] = dT_cells
         dx[lay.T] = dT
         dx[lay.heat_in] = Qdot.sum(axis=0)
         dx[lay.work_in] = -(p * Vdot).sum(axis=0)

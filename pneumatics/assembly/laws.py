@@ -5,10 +5,11 @@ levelling valves' levers and conductance tables."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Tuple
+from typing import Optional, Tuple
 
 import numpy as np
 
+from ..compressible_pipe import AIR_VISCOSITY_PA_S, PipeSegment
 from .arrays import column, read_only, rows, table_groups
 from .links import Links
 from .nodes import Nodes
@@ -16,9 +17,38 @@ from .valve_dynamics import ValveDynamics, compile_valve_dynamics
 
 
 @dataclass(frozen=True, eq=False)
+class ReynoldsFriction:
+    """The compressible pipes' links whose lambda follows the Reynolds number: their rows among
+    the pipe-flow states, their ends' node rows, l, A, their share of zeta, d, mu (rows, 1)."""
+
+    rows: object
+    a: object
+    b: object
+    length_m: np.ndarray
+    area_m2: np.ndarray
+    zeta: np.ndarray
+    diameter_m: np.ndarray
+    viscosity_Pa_s: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class ChokedEnds:
+    """The end links of the compressible pipes, whose flow is limited to the choked flow of
+    their upstream node: their rows among the pipe-flow states (= link rows), their ends' node
+    rows, A and l (rows, 1)."""
+
+    rows: object
+    a: object
+    b: object
+    area_m2: np.ndarray
+    length_m: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
 class DynamicPipes:
     """Pipes whose flow is a state (eq. 5): their links (the first ones, in the order of the
-    pipe-flow states), their ends' node rows, and each pipe's L, A, K (pipes, 1)."""
+    pipe-flow states), their ends' node rows, and each pipe's L, A, K (pipes, 1); the links of
+    compressible pipes with Reynolds friction and their end links (None: none)."""
 
     links: slice
     a: object
@@ -26,6 +56,8 @@ class DynamicPipes:
     length_m: np.ndarray
     area_m2: np.ndarray
     loss_coefficient: np.ndarray
+    reynolds: Optional[ReynoldsFriction] = None
+    choked: Optional[ChokedEnds] = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -121,7 +153,22 @@ def compile_dynamic_pipes(links: Links) -> DynamicPipes:
     """The numbers of eq. (5) over the dynamic pipes."""
     sl = links.rows["pipe"]
     L, A, K = _columns(links.parameters["pipe"], 3)
-    return DynamicPipes(sl, rows(links.a[sl]), rows(links.b[sl]), L, A, K)
+    items = [item for _, item in links.sources["pipe"]]
+    re_rows = [i for i, c in enumerate(items) if isinstance(c, PipeSegment) and c.friction_factor is None]
+    end_rows = [i for i, c in enumerate(items) if isinstance(c, PipeSegment) and c.end]
+    reynolds = choked = None
+    a, b = links.a[sl], links.b[sl]
+    if re_rows:
+        segs = [items[i] for i in re_rows]
+        reynolds = ReynoldsFriction(rows(re_rows), rows(a[re_rows]), rows(b[re_rows]),
+                                    *(column([getattr(c, f) for c in segs]) for f in ("length_m", "area_m2", "zeta",
+                                                                                      "diameter_m")),
+                                    column([AIR_VISCOSITY_PA_S] * len(segs)))
+    if end_rows:
+        segs = [items[i] for i in end_rows]
+        choked = ChokedEnds(rows(end_rows), rows(a[end_rows]), rows(b[end_rows]), column([c.area_m2 for c in segs]),
+                            column([c.length_m for c in segs]))
+    return DynamicPipes(sl, rows(a), rows(b), L, A, K, reynolds, choked)
 
 
 def compile_quasi_steady_pipes(links: Links) -> QuasiSteadyPipes:

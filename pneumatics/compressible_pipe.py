@@ -1,0 +1,180 @@
+"""A pipe that carries pressure waves: the lumped compressible line (``model: compressible``).
+
+The pipe of length L, bore d and area A is cut into N cells of length dx = L / N. Each cell is a
+small rigid, adiabatic chamber (:class:`PipeCell`, volume A dx, states mass and temperature, eqs
+1-3 as every chamber); N + 1 inertial links (:class:`PipeSegment`) join the pipe's end a, the
+cells in order and its end b: a staggered grid, pressures at the cell centres, flows at the
+faces. The inner links are dx long; the two end links dx / 2 (an end node sits at the pipe's
+end, the first cell's centre dx / 2 inside), so the links' lengths add up to L and the cells'
+volumes to A L. Each link obeys eq. (5) with its own length l:
+
+    (l / A) dq/dt = (p_up - p_down) - (lambda(Re) l / d + zeta_j) q |q| / (2 rho A^2),
+
+rho the mean density of its two nodes, zeta_j = zeta / 2 on each end link (the fittings) and 0
+inside. lambda is the pipe's ``friction_factor`` when it is given (constant), or Churchill's
+(1977) smooth-pipe formula of the Reynolds number Re = |q| d / (A mu) when it is null: 64 / Re
+in laminar flow (the pressure drop then linear in q: 32 mu l u / d^2), Blasius-like turbulent,
+one smooth curve through the transition (:func:`darcy_friction_factor`).
+
+What it conserves. Every link's flow leaves one node and enters the next: the air's mass is
+conserved exactly by the discretisation (to the integrator's tolerance in time). Each cell's
+first law is the chambers' eq. (2) (the flow carries the total enthalpy c_p T of its upstream
+node): the internal energy of the cells and chambers together changes only by the enthalpy
+brought from boundary nodes, the heat and the bellows' work, exactly, as in a circuit of
+inertial pipes. The kinetic energy of the air in the links is not in that balance (as it is not
+in eq. 5): it is O(Ma^2) of the internal energy, and the friction's dissipation is not returned
+to the air as heat (an error of the same order). The momentum equation has no convective flux
+(rho u^2): the line is the linear acoustic line with nonlinear wall friction, exact for small
+motions (wave speed c = sqrt(gamma R T), the modes of the pipe, its compliance A L / (gamma p)),
+approximate at Mach numbers where rho u^2 matters next to the pressure differences (a shock's
+speed; see docs/models.md for Sod's shock tube).
+
+Choking. The links have no sonic limit of their own, so the flow through each end link is
+limited to the isentropic choked mass flow of its upstream node (at rest: its static state taken
+for stagnation), m* = A p0 sqrt(gamma / (R T0)) (2 / (gamma + 1))^((gamma + 1) / (2 (gamma - 1))):
+the link's flow state q passes as w = q / (1 + |q / m*|^n)^(1/n) (n = :data:`CHOKE_SHARPNESS`; w
+differs from q by less than 1e-4 relative below |q| = m* / 3, and by nothing to first order at
+rest, so the acoustics are untouched), and q relaxes towards w in the link's acoustic time l / c
+(no wind-up while the end is choked). Mass and energy balances use w. The inner links are not
+limited: in a steady flow they carry what the ends do.
+
+Cells exchange no heat (``k_W_per_K`` is the bellows' and tanks'): a pipe's cycle is faster than
+its wall's thermal time at the frequencies its waves matter. With k = inf the chambers are
+isothermal, the cells still adiabatic.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Dict, Mapping, Tuple
+
+from .chamber import Tank
+from .compiled import elementwise, scalar
+from .errors import CircuitError
+from .pipe import Pipe
+
+#: the model name of a compressible pipe, and of the links it is made of
+COMPRESSIBLE = "compressible"
+SEGMENT = "compressible_segment"
+#: dynamic viscosity of air at 20 degrees Celsius [Pa s] (the Reynolds number of the wall friction)
+AIR_VISCOSITY_PA_S = 1.81e-5
+#: exponent n of the end links' choke w = q / (1 + |q/m*|^n)^(1/n): below |q| = m*/3, w = q within
+#: 3^-10 / 10 = 2e-6; a link driven far past m* (q = 1.6 m*) passes 0.995 m*
+CHOKE_SHARPNESS = 10.0
+
+
+@dataclass(frozen=True)
+class PipeCell(Tank):
+    """A cell of a compressible pipe: a rigid chamber of the pipe's air, at ``position`` (0 at
+    end ``a``, 1 at ``b``) along pipe ``pipe``. With no initial pressure of its own it starts at
+    the pressure and temperature interpolated between the pipe's ends' (``ends``)."""
+
+    pipe: str = ""
+    ends: Tuple[str, str] = ("", "")
+    position: float = 0.5
+
+
+@dataclass(frozen=True)
+class PipeSegment(Pipe):
+    """A link of a compressible pipe (eq. 5 over its length; ``zeta``: its share of the fittings'
+    loss). ``end``: ``a`` or ``b`` for the links at the pipe's ends (choked there), ``""`` inside;
+    ``friction_factor`` None: from the Reynolds number."""
+
+    owner: str = ""
+    end: str = ""
+
+
+def cell_count(pipe: Pipe) -> int:
+    """N: ``cells``, or the length over ``cell_length_m`` rounded up (at least 1)."""
+    if pipe.cells:
+        return int(pipe.cells)
+    return max(1, math.ceil(pipe.length_m / pipe.cell_length_m - 1e-9))
+
+
+def _check(name: str, pipe: Pipe) -> None:
+    cells = pipe.cells
+    if isinstance(cells, bool) or not isinstance(cells, int) or cells < 0:
+        raise CircuitError([name, "cells"], f"must be an integer >= 0 (0: from cell_length_m), got {cells!r}")
+    if not (math.isfinite(pipe.cell_length_m) and pipe.cell_length_m > 0):
+        raise CircuitError([name, "cell_length_m"], f"must be > 0 m, got {pipe.cell_length_m}")
+    for field in ("length_m", "diameter_m"):
+        if not getattr(pipe, field) > 0:
+            raise CircuitError([name, field], f"must be > 0, got {getattr(pipe, field)}")
+
+
+def expand_compressible_pipes(components: Mapping[str, object]) -> Dict[str, object]:
+    """``components`` with each compressible pipe replaced, where it stands, by its links and
+    cells: the link at end ``a`` keeps the pipe's name (a fault on the pipe, a flow looked up by
+    its name, find it), the others are ``<pipe>.seg<i>`` (i = 1..N), the cells ``<pipe>.cell<i>``
+    (i = 1..N, from a to b). Other components are kept, in their order. A pipe whose
+    ``friction_factor`` is null must be compressible."""
+    out: Dict[str, object] = {}
+    for name, comp in components.items():
+        if not isinstance(comp, Pipe) or isinstance(comp, PipeSegment):
+            out[name] = comp
+            continue
+        if comp.model != COMPRESSIBLE:
+            if comp.friction_factor is None:
+                raise CircuitError([name, "friction_factor"], "null (from the Reynolds number) needs model: "
+                                                              "compressible; give a number")
+            out[name] = comp
+            continue
+        _check(name, comp)
+        n = cell_count(comp)
+        dx = comp.length_m / n
+        cells = [f"{name}.cell{i}" for i in range(1, n + 1)]
+        nodes = [comp.a, *cells, comp.b]
+        for i in range(n + 1):
+            end = "a" if i == 0 else ("b" if i == n else "")
+            out[name if i == 0 else f"{name}.seg{i}"] = PipeSegment(
+                nodes[i], nodes[i + 1], length_m=dx / 2 if end else dx, diameter_m=comp.diameter_m,
+                friction_factor=comp.friction_factor, zeta=comp.zeta / 2 if end else 0.0, model=SEGMENT,
+                owner=name, end=end)
+        for i, cell in enumerate(cells):
+            out[cell] = PipeCell(V_m3=comp.area_m2 * dx, pipe=name, ends=(comp.a, comp.b), position=(i + 0.5) / n)
+    return out
+
+
+@scalar
+def darcy_friction_factor(reynolds):
+    """Churchill's (1977) Darcy friction factor of a smooth pipe, every regime in one smooth
+    curve: 64/Re laminar, within 2 % of Blasius 0.316 Re^-1/4 at Re = 1e4-1e5 (Re > 0)."""
+    a = (2.457 * 0.9 * math.log(reynolds / 7.0)) ** 16
+    b = (37530.0 / reynolds) ** 16
+    return 8.0 * ((8.0 / reynolds) ** 12 + (a + b) ** -1.5) ** (1.0 / 12.0)
+
+
+@elementwise(9)
+def segment_flow_rate_kg_per_s2(q_kg_per_s, p_a_Pa, p_b_Pa, rho_kg_per_m3, length_m, area_m2, zeta, diameter_m,
+                                viscosity_Pa_s):
+    """dq/dt of a link of a compressible pipe whose lambda follows the Reynolds number:
+    A/l ((p_a - p_b) - (lambda(Re) l / d + zeta) q |q| / (2 rho A^2)), Re = |q| d / (A mu).
+    lambda |q| is evaluated as one expression, finite at q = 0 (64 A mu / d: laminar friction is
+    linear in the flow)."""
+    q_abs = abs(q_kg_per_s)
+    laminar = 8.0 * area_m2 * viscosity_Pa_s / diameter_m          # (8 / Re) |q|
+    reynolds = max(q_abs / laminar * 8.0, 1e-3)      # Re < 1e-3: all laminar term (no overflow)
+    a = (2.457 * 0.9 * math.log(reynolds / 7.0)) ** 16
+    b = (37530.0 / reynolds) ** 16
+    lambda_q = 8.0 * (laminar ** 12 + q_abs ** 12 * (a + b) ** -1.5) ** (1.0 / 12.0)
+    drop = (lambda_q * length_m / diameter_m + zeta * q_abs) * q_kg_per_s / (2.0 * rho_kg_per_m3 * (area_m2 * area_m2))
+    return area_m2 / length_m * ((p_a_Pa - p_b_Pa) - drop)
+
+
+@scalar
+def choked_mass_flow_kg_per_s(area_m2, p0_Pa, T0_K, R_J_per_kgK, gamma):
+    """The isentropic choked mass flow through area A from stagnation state (p0, T0):
+    A p0 sqrt(gamma / (R T0)) (2 / (gamma + 1))^((gamma + 1) / (2 (gamma - 1)))."""
+    return area_m2 * p0_Pa * math.sqrt(gamma / (R_J_per_kgK * T0_K)) * (2.0 / (gamma + 1.0)) ** (
+        (gamma + 1.0) / (2.0 * (gamma - 1.0)))
+
+
+@elementwise(8)
+def choked_end_flow_kg_per_s(q_kg_per_s, area_m2, p_a_Pa, T_a_K, p_b_Pa, T_b_K, R_J_per_kgK, gamma):
+    """The flow w an end link passes for its state q: q / (1 + |q / m*|^n)^(1/n), m* the choked
+    flow of the upstream node (a for q >= 0, else b; n = CHOKE_SHARPNESS)."""
+    if q_kg_per_s >= 0.0:
+        limit = choked_mass_flow_kg_per_s(area_m2, p_a_Pa, T_a_K, R_J_per_kgK, gamma)
+    else:
+        limit = choked_mass_flow_kg_per_s(area_m2, p_b_Pa, T_b_K, R_J_per_kgK, gamma)
+    return q_kg_per_s / (1.0 + abs(q_kg_per_s / limit) ** CHOKE_SHARPNESS) ** (1.0 / CHOKE_SHARPNESS)
