@@ -29,14 +29,15 @@ motions (wave speed c = sqrt(gamma R T), the modes of the pipe, its compliance A
 approximate at Mach numbers where rho u^2 matters next to the pressure differences (a shock's
 speed; see docs/models.md for Sod's shock tube).
 
-Choking. The links have no sonic limit of their own, so the flow through each end link is
-limited to the isentropic choked mass flow of its upstream node (at rest: its static state taken
-for stagnation), m* = A p0 sqrt(gamma / (R T0)) (2 / (gamma + 1))^((gamma + 1) / (2 (gamma - 1))):
-the link's flow state q passes as w = q / (1 + |q / m*|^n)^(1/n) (n = :data:`CHOKE_SHARPNESS`; w
-differs from q by less than 1e-4 relative below |q| = m* / 3, and by nothing to first order at
-rest, so the acoustics are untouched), and q relaxes towards w in the link's acoustic time l / c
-(no wind-up while the end is choked). Mass and energy balances use w. The inner links are not
-limited: in a steady flow they carry what the ends do.
+Choking. The links have no sonic limit of their own, so the flow leaving the pipe through
+either end (a constant-area pipe chokes at its exit) is limited to the isentropic choked mass flow
+of the end cell it leaves (its static state taken for stagnation: the cells hold air at rest),
+m* = A p0 sqrt(gamma / (R T0)) (2 / (gamma + 1))^((gamma + 1) / (2 (gamma - 1))): the end link's
+flow state q passes as w = q / (1 + |q / m*|^n)^(1/n) (n = :data:`CHOKE_SHARPNESS`; w differs
+from q by less than 1e-5 relative below |q| = m* / 3, and by nothing to first order at rest, so
+the acoustics are untouched), and q relaxes towards w in the link's acoustic time l / c (no
+wind-up while the end is choked). Mass and energy balances use w. Air entering the pipe and the
+inner links are not limited: in a steady flow they carry what the exit passes.
 
 Cells exchange no heat (``k_W_per_K`` is the bellows' and tanks'): a pipe's cycle is faster than
 its wall's thermal time at the frequencies its waves matter. With k = inf the chambers are
@@ -59,7 +60,8 @@ SEGMENT = "compressible_segment"
 #: dynamic viscosity of air at 20 degrees Celsius [Pa s] (the Reynolds number of the wall friction)
 AIR_VISCOSITY_PA_S = 1.81e-5
 #: exponent n of the end links' choke w = q / (1 + |q/m*|^n)^(1/n): below |q| = m*/3, w = q within
-#: 3^-10 / 10 = 2e-6; a link driven far past m* (q = 1.6 m*) passes 0.995 m*
+#: 3^-10 / 10 = 2e-6; an exit driven to q = 2 m* (a pipe blowing into the atmosphere) passes
+#: 0.999 m*
 CHOKE_SHARPNESS = 10.0
 
 
@@ -169,12 +171,12 @@ def choked_mass_flow_kg_per_s(area_m2, p0_Pa, T0_K, R_J_per_kgK, gamma):
         (gamma + 1.0) / (2.0 * (gamma - 1.0)))
 
 
-@elementwise(8)
-def choked_end_flow_kg_per_s(q_kg_per_s, area_m2, p_a_Pa, T_a_K, p_b_Pa, T_b_K, R_J_per_kgK, gamma):
-    """The flow w an end link passes for its state q: q / (1 + |q / m*|^n)^(1/n), m* the choked
-    flow of the upstream node (a for q >= 0, else b; n = CHOKE_SHARPNESS)."""
-    if q_kg_per_s >= 0.0:
-        limit = choked_mass_flow_kg_per_s(area_m2, p_a_Pa, T_a_K, R_J_per_kgK, gamma)
-    else:
-        limit = choked_mass_flow_kg_per_s(area_m2, p_b_Pa, T_b_K, R_J_per_kgK, gamma)
+@elementwise(7)
+def choked_end_flow_kg_per_s(q_kg_per_s, area_m2, p_cell_Pa, T_cell_K, outflow_sign, R_J_per_kgK, gamma):
+    """The flow w an end link passes for its state q. Leaving the pipe (q outflow_sign > 0;
+    outflow_sign -1 at end a, +1 at end b): q / (1 + |q / m*|^n)^(1/n), m* the choked flow of the
+    end cell (n = CHOKE_SHARPNESS); entering it: q."""
+    if q_kg_per_s * outflow_sign <= 0.0:
+        return q_kg_per_s
+    limit = choked_mass_flow_kg_per_s(area_m2, p_cell_Pa, T_cell_K, R_J_per_kgK, gamma)
     return q_kg_per_s / (1.0 + abs(q_kg_per_s / limit) ** CHOKE_SHARPNESS) ** (1.0 / CHOKE_SHARPNESS)

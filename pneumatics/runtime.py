@@ -201,9 +201,8 @@ class CircuitRuntime:
         w[self._pipes.links] = x2[lay.q]
         ends = self._pipes.choked
         if ends is not None:                               # compressible pipes' ends: choked flow
-            ia, ib = ends.a, ends.b
-            w[ends.rows] = choked_end_flow_kg_per_s(x2[lay.q][ends.rows], ends.area_m2, p_n[ia], T_n[ia], p_n[ib],
-                                                    T_n[ib], gas.R_J_per_kgK, gas.gamma)
+            w[ends.rows] = choked_end_flow_kg_per_s(x2[lay.q][ends.rows], ends.area_m2, p_n[ends.cell], T_n[ends.cell],
+                                                    ends.outflow_sign, gas.R_J_per_kgK, gas.gamma)
         qs = self._quasi_steady
         if qs.count:
             ia, ib = a[qs.links], b[qs.links]
@@ -324,9 +323,8 @@ class CircuitRuntime:
                                                       fr.length_m, fr.area_m2, fr.zeta, fr.diameter_m, fr.viscosity_Pa_s)
         ends = self._pipes.choked
         if ends is not None:
-            q_end = q[ends.rows]
-            T_up = np.where(q_end >= 0.0, T_n[ends.a], T_n[ends.b])
-            dq[ends.rows] -= (q_end - w[ends.rows]) * np.sqrt(gas.gamma * gas.R_J_per_kgK * T_up) / ends.length_m
+            c = np.sqrt(gas.gamma * gas.R_J_per_kgK * T_n[ends.cell])
+            dq[ends.rows] -= (q[ends.rows] - w[ends.rows]) * c / ends.length_m
 
     def _write_crushing_rate_terms(self, dx: np.ndarray, x2: np.ndarray, terms, zdot2: np.ndarray) -> None:
         """Write the rows of d(state)/dt that the crushing rate enters: temperatures (eq. 2, with

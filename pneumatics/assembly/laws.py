@@ -33,15 +33,15 @@ class ReynoldsFriction:
 
 @dataclass(frozen=True, eq=False)
 class ChokedEnds:
-    """The end links of the compressible pipes, whose flow is limited to the choked flow of
-    their upstream node: their rows among the pipe-flow states (= link rows), their ends' node
-    rows, A and l (rows, 1)."""
+    """The end links of the compressible pipes, whose flow out of the pipe is limited to the
+    choked flow of their cell: their rows among the pipe-flow states (= link rows), their cells'
+    node rows, A, l and the sign of a flow out of the pipe (-1 at end a, +1 at b) (rows, 1)."""
 
     rows: object
-    a: object
-    b: object
+    cell: np.ndarray
     area_m2: np.ndarray
     length_m: np.ndarray
+    outflow_sign: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,8 +166,9 @@ def compile_dynamic_pipes(links: Links) -> DynamicPipes:
                                     column([AIR_VISCOSITY_PA_S] * len(segs)))
     if end_rows:
         segs = [items[i] for i in end_rows]
-        choked = ChokedEnds(rows(end_rows), rows(a[end_rows]), rows(b[end_rows]), column([c.area_m2 for c in segs]),
-                            column([c.length_m for c in segs]))
+        cell = np.where([c.end == "a" for c in segs], b[end_rows], a[end_rows])
+        choked = ChokedEnds(rows(end_rows), read_only(cell), column([c.area_m2 for c in segs]),
+                            column([c.length_m for c in segs]), column([-1.0 if c.end == "a" else 1.0 for c in segs]))
     return DynamicPipes(sl, rows(a), rows(b), L, A, K, reynolds, choked)
 
 
