@@ -160,7 +160,7 @@ def sod_density_L1(cells: int) -> float:
     p0 = np.where(xc < 0.5, 1e5, 1e4)
     x[lay.m][rows], x[lay.T][rows] = rho0 * V, p0 / (rho0 * R)
     t_end = 0.2 / math.sqrt(1e5)
-    f = lambda t, xx: circuit.derivatives(xx, np.zeros(0), np.zeros(0))  # noqa: E731
+    f = lambda t, xx: circuit.derivatives(xx, np.zeros(0), np.zeros(0))
     x = rk4(f, x, 0.0, t_end, int(math.ceil(t_end / stable_step_s(circuit, x, 1.0))))
     return float(np.mean(np.abs(x[lay.m][rows] / V - sod_exact_density(xc, t_end))))
 
