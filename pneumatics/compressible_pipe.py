@@ -1,43 +1,52 @@
-"""A pipe that carries pressure waves: the lumped compressible line (``model: compressible``).
+"""A pipe that carries pressure waves: a lumped compressible line (``model: compressible``).
 
 The pipe of length L, bore d and area A is cut into N cells of length dx = L / N. Each cell is a
 small rigid, adiabatic chamber (:class:`PipeCell`, volume A dx, states mass and temperature, eqs
-1-3 as every chamber); N + 1 inertial links (:class:`PipeSegment`) join the pipe's end a, the
-cells in order and its end b: a staggered grid, pressures at the cell centres, flows at the
-faces. The inner links are dx long; the two end links dx / 2 (an end node sits at the pipe's
-end, the first cell's centre dx / 2 inside), so the links' lengths add up to L and the cells'
-volumes to A L. Each link obeys eq. (5) with its own length l:
+1-3 as every chamber); N + 1 inertial links (:class:`PipeSegment`, state: the mass flow q, a ->
+b) join the pipe's end a, the cells in order and its end b: a staggered grid, pressures at the
+cell centres, flows at the faces. The inner links are dx long; the two end links dx / 2 (an end
+node sits at the pipe's end, the first cell's centre dx / 2 inside), so the links' lengths add up
+to L and the cells' volumes to A L.
 
-    (l / A) dq/dt = (p_up - p_down) - (lambda(Re) l / d + zeta_j) q |q| / (2 rho A^2),
+Momentum, on a link of length l between nodes L and R:
 
-rho the mean density of its two nodes, zeta_j = zeta / 2 on each end link (the fittings) and 0
-inside. lambda is the pipe's ``friction_factor`` when it is given (constant), or Churchill's
-(1977) smooth-pipe formula of the Reynolds number Re = |q| d / (A mu) when it is null: 64 / Re
-in laminar flow (the pressure drop then linear in q: 32 mu l u / d^2), Blasius-like turbulent,
-one smooth curve through the transition (:func:`darcy_friction_factor`).
+    (l / A) dq/dt = (p_L - p_R) + (M_L - M_R) / A - (lambda(Re) l / d + zeta_j) q |q| / (2 rho A^2),
 
-What it conserves. Every link's flow leaves one node and enters the next: the air's mass is
-conserved exactly by the discretisation (to the integrator's tolerance in time). Each cell's
-first law is the chambers' eq. (2) (the flow carries the total enthalpy c_p T of its upstream
-node): the internal energy of the cells and chambers together changes only by the enthalpy
-brought from boundary nodes, the heat and the bellows' work, exactly, as in a circuit of
-inertial pipes. The kinetic energy of the air in the links is not in that balance (as it is not
-in eq. 5): it is O(Ma^2) of the internal energy, and the friction's dissipation is not returned
-to the air as heat (an error of the same order). The momentum equation has no convective flux
-(rho u^2): the line is the linear acoustic line with nonlinear wall friction, exact for small
-motions (wave speed c = sqrt(gamma R T), the modes of the pipe, its compliance A L / (gamma p)),
-approximate at Mach numbers where rho u^2 matters next to the pressure differences (a shock's
-speed; see docs/models.md for Sod's shock tube).
+rho the mean density of its two nodes. M is the momentum flux rho u^2 A of a cell: its mass flow
+(the mean of its two links') times the velocity of its upwind link (an end cell moves with its
+inner link). On an end link, M is left out (the flux is the same at the pipe's end as at its
+first cell's centre); instead, air entering the pipe from a chamber at rest accelerates
+isentropically to its cell's velocity u, a drop p_C (1 - (1 - u^2 / (2 c_p T_C))^(gamma /
+(gamma - 1))) (rho u^2 / 2 at low speed), and air leaving it is a jet whose dynamic pressure is
+not regained (its kinetic energy heats the chamber: the exit loss, 1 velocity head). zeta_j =
+max(zeta - 1, 0) / 2 on each end link and 0 inside: ``zeta`` keeps eq. (5)'s meaning, the pipe's
+total loss coefficient in a steady flow, exit loss included. lambda is the pipe's
+``friction_factor`` when given (constant), or Churchill's (1977) smooth-pipe formula of the
+Reynolds number Re = |q| d / (A mu) when it is null: 64 / Re in laminar flow (the drop then
+linear in q), Blasius-like turbulent, one smooth curve through the transition
+(:func:`darcy_friction_factor`).
 
-Choking. The links have no sonic limit of their own, so the flow leaving the pipe through
-either end (a constant-area pipe chokes at its exit) is limited to the isentropic choked mass flow
-of the end cell it leaves (its static state taken for stagnation: the cells hold air at rest),
-m* = A p0 sqrt(gamma / (R T0)) (2 / (gamma + 1))^((gamma + 1) / (2 (gamma - 1))): the end link's
-flow state q passes as w = q / (1 + |q / m*|^n)^(1/n) (n = :data:`CHOKE_SHARPNESS`; w differs
-from q by less than 1e-5 relative below |q| = m* / 3, and by nothing to first order at rest, so
-the acoustics are untouched), and q relaxes towards w in the link's acoustic time l / c (no
-wind-up while the end is choked). Mass and energy balances use w. Air entering the pipe and the
-inner links are not limited: in a steady flow they carry what the exit passes.
+Energy. Each cell's first law is the chambers' eq. (2), with the flows carrying the total
+enthalpy c_p T + u^2 / 2 of their upstream node (a chamber's air at rest: c_p T) and each cell's
+kinetic energy m u^2 / 2 taken out of its internal energy as it changes.
+
+What it conserves. Mass exactly: every link's flow leaves one node and enters the next. Energy:
+the internal energy of cells and chambers plus the cells' kinetic energy changes only by the
+enthalpy from boundary nodes, the heat and the bellows' work (to the integrator's tolerance);
+friction and the exit jet's dissipation stay in the air as heat. Momentum up to the friction and
+the ends. For small motions it is the linear acoustic line (wave speed sqrt(gamma R T), the
+pipe's modes, its compliance A L / (gamma p)); with the momentum flux and the kinetic energy it
+also converges to Euler's solution of Sod's shock tube, at the order of an upwind scheme.
+
+Choking. The links have no sonic limit of their own. A jet leaving the pipe sees no pressure
+below the critical one, p0 (2 / (gamma + 1))^(gamma / (gamma - 1)), of its cell's stagnation
+state (T0 = T + u^2 / (2 c_p), p0 = p (T0 / T)^(gamma / (gamma - 1))), and its flow is limited to
+the isentropic choked mass flow of that state, m* = A p0 sqrt(gamma / (R T0)) (2 / (gamma +
+1))^((gamma + 1) / (2 (gamma - 1))): the end link's state q passes as w = q / (1 + |q /
+m*|^n)^(1/n) (n = :data:`CHOKE_SHARPNESS`; w = q within 1e-10 below |q| = m* / 3, and to first
+order at rest, so the acoustics are untouched), and q relaxes towards w in the link's acoustic
+time l / c (no wind-up). Mass and energy balances use w. Air entering the pipe and the inner
+links are not limited: in a steady flow they carry what the exit passes.
 
 Cells exchange no heat (``k_W_per_K`` is the bellows' and tanks'): a pipe's cycle is faster than
 its wall's thermal time at the frequencies its waves matter. With k = inf the chambers are
@@ -54,15 +63,18 @@ from .compiled import elementwise, scalar
 from .errors import CircuitError
 from .pipe import Pipe
 
+#: the loss coefficient of a jet leaving a pipe into a chamber (Borda-Carnot: its dynamic
+#: pressure, not regained), which the compressible pipe models itself and takes out of zeta
+EXIT_LOSS = 1.0
 #: the model name of a compressible pipe, and of the links it is made of
 COMPRESSIBLE = "compressible"
 SEGMENT = "compressible_segment"
 #: dynamic viscosity of air at 20 degrees Celsius [Pa s] (the Reynolds number of the wall friction)
 AIR_VISCOSITY_PA_S = 1.81e-5
 #: exponent n of the end links' choke w = q / (1 + |q/m*|^n)^(1/n): below |q| = m*/3, w = q within
-#: 3^-10 / 10 = 2e-6; an exit driven to q = 2 m* (a pipe blowing into the atmosphere) passes
-#: 0.999 m*
-CHOKE_SHARPNESS = 10.0
+#: 3^-20 / 20 = 1e-11; a pipe blowing into the atmosphere holds its exit at q = 1.09 m* and passes
+#: 0.99 m* (at n = 10 it passed 0.97 m*)
+CHOKE_SHARPNESS = 20.0
 
 
 @dataclass(frozen=True)
@@ -124,13 +136,14 @@ def expand_compressible_pipes(components: Mapping[str, object]) -> Dict[str, obj
         _check(name, comp)
         n = cell_count(comp)
         dx = comp.length_m / n
+        fittings = max(comp.zeta - EXIT_LOSS, 0.0)     # the exit's velocity head is the model's own
         cells = [f"{name}.cell{i}" for i in range(1, n + 1)]
         nodes = [comp.a, *cells, comp.b]
         for i in range(n + 1):
             end = "a" if i == 0 else ("b" if i == n else "")
             out[name if i == 0 else f"{name}.seg{i}"] = PipeSegment(
                 nodes[i], nodes[i + 1], length_m=dx / 2 if end else dx, diameter_m=comp.diameter_m,
-                friction_factor=comp.friction_factor, zeta=comp.zeta / 2 if end else 0.0, model=SEGMENT,
+                friction_factor=comp.friction_factor, zeta=fittings / 2 if end else 0.0, model=SEGMENT,
                 owner=name, end=end)
         for i, cell in enumerate(cells):
             out[cell] = PipeCell(V_m3=comp.area_m2 * dx, pipe=name, ends=(comp.a, comp.b), position=(i + 0.5) / n)

@@ -89,7 +89,7 @@ def assemble(components: Mapping[str, object], *, gas: Gas = AIR, atmosphere: At
     compiled = expand_compressible_pipes(given)
     links = compile_links(compiled, nodes, fault_openings(faults, active, given, nodes.chamber_names, gas))
     valves = compile_levelling_valves(links, nodes)
-    pipes = compile_dynamic_pipes(links)
+    pipes = compile_dynamic_pipes(links, chambers.V0_m3)
     n_pipes = pipes.links.stop - pipes.links.start
     air_supply = compile_air_supply(links, free_air_density_kg_per_m3(atmosphere.p_Pa, atmosphere.T_K, gas.R_J_per_kgK),
                                     normal_density_kg_per_m3(gas.R_J_per_kgK))

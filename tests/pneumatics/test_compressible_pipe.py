@@ -1,7 +1,7 @@
 """The compressible pipe (``model: compressible``, :mod:`pneumatics.compressible_pipe`) against
 what it must reproduce: the acoustic modes of a pipe, the inertial pipe of eq. (5) for a short
 pipe at low frequency, the conservation of mass and energy, the choked flow at its end, and
-Sod's shock tube (where the lumped line's limits show)."""
+Sod's shock tube."""
 from __future__ import annotations
 
 import math
@@ -104,14 +104,26 @@ def rig_run(k_W_per_K: float, friction_factor=0.0, t_end_s: float = 0.6):
     return circuit, x0, sol.y[:, -1]
 
 
+def air_energy_J(circuit: Circuit, x: np.ndarray) -> float:
+    """Internal energy of every chamber and cell, plus the cells' kinetic energy m u^2 / 2, u the
+    mean of its two links' flows over rho A."""
+    lay, cells = circuit.layout, circuit.assembly.pipes.cells
+    q, m = x[lay.q], x[lay.m]
+    flow = 0.5 * (q[cells.left] + q[cells.right])
+    kinetic = flow ** 2 * cells.dx_m[:, 0] ** 2 / (2 * m[cells.rows])
+    return circuit.gas.cv_J_per_kgK * m @ x[lay.T] + kinetic.sum()
+
+
 @pytest.mark.parametrize("k, friction_factor", [(0.0, 0.0), (100.0, None)])
 def test_mass_and_energy_are_conserved_over_a_rig_run(k, friction_factor):
     """Three cycles of 20 mm at 5 Hz (the pipe's air at up to Mach ~0.6): the air's mass does not
-    change, and its internal energy changes by the bellow's work and the heat from outside."""
+    change, and its energy (internal, and the cells' kinetic) changes by the bellow's work and the
+    heat from outside."""
     circuit, x0, x1 = rig_run(k, friction_factor)
-    lay, cv = circuit.layout, circuit.gas.cv_J_per_kgK
+    lay = circuit.layout
     mass0, mass1 = x0[lay.m].sum(), x1[lay.m].sum()
-    energy0, energy1 = cv * x0[lay.m] @ x0[lay.T], cv * x1[lay.m] @ x1[lay.T]
+    energy0, energy1 = air_energy_J(circuit, x0), air_energy_J(circuit, x1)
+    assert energy1 - energy0 != pytest.approx(0.0, abs=1e-3 * energy0)     # the run did change it
     # mass: its rate sums to zero exactly (every link leaves one node and enters another), so
     # only round-off remains (1e-14 of the mass per step over ~1e4 steps)
     assert abs(mass1 / mass0 - 1) < 1e-12
@@ -124,9 +136,10 @@ def test_mass_and_energy_are_conserved_over_a_rig_run(k, friction_factor):
 def test_choked_flow_at_the_end_of_a_pipe_to_the_atmosphere():
     """A short pipe without losses from a 5 bar supply to the atmosphere (pressure ratio 0.2 <
     0.528: choked): the steady flow it delivers is the isentropic choked flow of the supply's
-    state within 1 % from below (:data:`~pneumatics.compressible_pipe.CHOKE_SHARPNESS`: an exit
-    driven to 2 m* passes 0.999 m*; the cells' air, at rest, is at the supply's state), never
-    above it."""
+    state within 2 % from below, never above it. (It gives 0.990 m*: the air enters the pipe
+    isentropically, the exit sees no pressure below the critical one, and the end link passes
+    q / (1 + (q/m*)^20)^(1/20) of its state q = 1.09 m*; the pipe's Mach number is 0.89, not 1,
+    where the lumped line's last cell stands for the whole exit.)"""
     p0, T0 = 5e5, T_ATM
     comps = {"supply": Supply(p_Pa=p0, T_K=T0), "pipe": Pipe("supply", "atmosphere", length_m=0.2, diameter_m=D_M,
                                                              zeta=0.0, model="compressible", cells=4)}
@@ -138,7 +151,7 @@ def test_choked_flow_at_the_end_of_a_pipe_to_the_atmosphere():
     exit_flow = w[circuit.link_names.index("pipe.seg4")]
     m_star = AREA_M2 * p0 * math.sqrt(GAMMA / (R * T0)) * (2 / (GAMMA + 1)) ** ((GAMMA + 1) / (2 * (GAMMA - 1)))
     assert choked_mass_flow_kg_per_s(AREA_M2, p0, T0, R, GAMMA) == pytest.approx(m_star, rel=1e-15)
-    assert 0.99 * m_star < exit_flow <= m_star
+    assert 0.98 * m_star < exit_flow <= m_star
     # steady: every link of the pipe carries the same flow (to the integrator's tolerance)
     np.testing.assert_allclose(w, exit_flow, rtol=1e-4)
 
@@ -148,8 +161,8 @@ def sod_density_L1(cells: int) -> float:
     the left, 1e4 Pa and 0.125 kg/m^3 on the right, at t = 0.2 L / sqrt(p_L / rho_L): L1 error of
     the cells' density against the exact Riemann solution [kg/m^3 . m]."""
     area = math.pi * 0.05 ** 2 / 4
-    tiny = area * 1e-6
-    comps = {"left": Tank(V_m3=tiny, p0_Pa=1e5, T0_K=1e5 / R), "right": Tank(V_m3=tiny, p0_Pa=1e4, T0_K=1e4 / (0.125 * R)),
+    end = area / cells          # the ends: chambers of a cell's volume (no wave reaches them by t_end)
+    comps = {"left": Tank(V_m3=end, p0_Pa=1e5, T0_K=1e5 / R), "right": Tank(V_m3=end, p0_Pa=1e4, T0_K=1e4 / (0.125 * R)),
              "tube": Pipe("left", "right", length_m=1.0, diameter_m=0.05, zeta=0.0, model="compressible", cells=cells)}
     circuit = Circuit(comps, k_W_per_K=0.0)
     lay, x = circuit.layout, circuit.initial_state()
@@ -189,18 +202,21 @@ def sod_exact_density(x: np.ndarray, t: float) -> np.ndarray:
     return np.select([s < -cL, s < tail, s < us, s < shock], [rL, fan, rL * (ps / pL) ** (1 / g), r_star_R], rR)
 
 
-def test_sod_shock_tube_shows_the_lumped_lines_limit():
-    """The lumped line has no convective momentum flux (rho u^2) and leaves the air's kinetic
-    energy out of its energy balance: behind Sod's shock (u ~ 0.9 c) both matter, and its
-    solution converges to another than Euler's. The L1 error of density stays at ~0.063-0.066
-    of rho_L from 50 to 400 cells (docs/models.md); this test holds that floor, so that a better
-    scheme shows as a failure to update, not a silent change."""
-    errors = [sod_density_L1(n) for n in (50, 100, 200)]
-    # the exact solution of the exact solver checked against Toro's table 4.2 star state
+#: Sod's shock tube, L1 error of density [kg/m^3 . m] against the exact solution, as
+#: ``python -c "from test_compressible_pipe import *; print([sod_density_L1(n) for n in ...])"``
+#: gives it: 50 cells 0.0180, 100 0.0114, 200 0.0073, 400 0.0048; observed orders 0.65, 0.65, 0.62
+#: (first order in smooth flow, ~0.5-1 with a shock and a contact: the upwind enthalpy and
+#: momentum fluxes smear them over a few cells)
+def test_sod_shock_tube_converges_at_the_order_of_an_upwind_scheme():
+    errors = np.array([sod_density_L1(n) for n in (100, 200, 400)])
+    # the exact solution checked against Toro's table 4.2 (rho*_R = 0.26557 behind the shock)
     assert sod_exact_density(np.array([0.6]), 0.1 / 316.2)[0] == pytest.approx(0.26557, rel=1e-3)
-    # bounds: between 0.05 and 0.08 (the floor measured, +-25 %), and not falling with cells
-    assert all(0.05 < e < 0.08 for e in errors), errors
-    assert errors[-1] > 0.9 * errors[0], errors
+    order = np.log2(errors[:-1] / errors[1:])
+    # 0.5-1: what a first-order scheme gives near a shock and a contact (the brief's range); the
+    # error at 400 cells, 0.48 % of rho_L (x 1 m), below 1 %: the shock's position and plateaus
+    # are right (a model without the rho u^2 flux and the kinetic energy stayed at 6.5 %)
+    assert np.all((order > 0.5) & (order < 1.0)), order
+    assert errors[-1] < 0.01, errors
 
 
 def test_expansion_and_checks():
@@ -209,10 +225,11 @@ def test_expansion_and_checks():
     assert cell_count(Pipe("a", "b", length_m=1.01, model="compressible")) == 21
     assert cell_count(Pipe("a", "b", model="compressible", cells=7)) == 7
     comps = expand_compressible_pipes({"a": Tank(p0_Pa=4e5), "b": Tank(p0_Pa=3e5), "p": Pipe("a", "b", model="compressible",
-                                                                                             cells=3, zeta=1.0)})
+                                                                                             cells=3, zeta=1.5)})
     assert list(comps) == ["a", "b", "p", "p.seg1", "p.seg2", "p.seg3", "p.cell1", "p.cell2", "p.cell3"]
     assert sum(c.length_m for c in comps.values() if isinstance(c, Pipe)) == pytest.approx(1.0, rel=1e-15)
-    assert sum(c.zeta for c in comps.values() if isinstance(c, Pipe)) == 1.0
+    # the fittings' share: zeta less the exit's velocity head, which the line models itself
+    assert sum(c.zeta for c in comps.values() if isinstance(c, Pipe)) == 0.5
     assert sum(c.V_m3 for c in comps.values() if isinstance(c, PipeCell)) == pytest.approx(AREA_M2, rel=1e-15)
     circuit = Circuit({"a": Tank(p0_Pa=4e5), "b": Tank(p0_Pa=3e5), "p": Pipe("a", "b", model="compressible", cells=3)})
     p = circuit.chamber_states(circuit.initial_state(), np.zeros(0))[0][:, 0]
