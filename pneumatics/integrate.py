@@ -38,18 +38,32 @@ def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1):
         return z, zd
     return motion
 
+#: RK4's step for the compressible pipes' fastest (undamped) wave, h omega_max with omega_max =
+#: 2 c / dx = c / l_end: RK4 is stable on the imaginary axis up to 2.83, and its amplitude error
+#: per step there is (h omega)^6 / 144 (1.8e-3 at 1.2 for a mode that is numerical noise anyway)
+ACOUSTIC_COURANT = 1.2
+
 
 def stable_step_s(circuit: Circuit, x: np.ndarray, h_max_s: float = 1e-3, courant: float = 1.5) -> float:
     """A fixed RK4 step that keeps the thermal relaxation stable: h <= courant / max(k / (m c_v)).
 
     RK4's stability limit is |h lambda| < 2.78 on the real axis. At ``courant`` = 1.5 a step damps
     that mode by 0.27 instead of exp(-1.5) = 0.22: a fast transient decaying a little slower, with
-    the slow thermal state itself unaffected. ``h_max_s`` bounds the step for the pipe mode.
+    the slow thermal state itself unaffected. ``h_max_s`` bounds the step for the pipe mode; a
+    compressible pipe's fastest wave bounds it too (:data:`ACOUSTIC_COURANT`); its cells, which
+    exchange no heat, do not count in the thermal rate.
     """
     k = circuit.assembly.heat.k_finite_W_per_K
+    ends, cells = circuit.assembly.pipes.choked, circuit.assembly.chambers.pipe_cells
+    if ends is not None:                     # compressible pipes: their fastest wave, 2 c / dx
+        gas = circuit.gas
+        T = np.max(x[circuit.layout.T][cells])
+        h_max_s = min(h_max_s, ACOUSTIC_COURANT * np.min(ends.length_m) / math.sqrt(gas.gamma * gas.R_J_per_kgK * T))
     if not np.any(k > 0):
         return h_max_s
     m = x[circuit.layout.m]
+    if cells is not None:                    # the cells exchange no heat
+        m = np.delete(m, cells, axis=0)
     rate = np.max(np.asarray(k) / (np.min(m) * circuit.gas.cv_J_per_kgK))
     return min(h_max_s, courant / rate)
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 
@@ -21,16 +22,26 @@ class Pipe:
 
     The pressure-drop coefficient is lambda L/d + zeta; Table 1 gives a total of 1.11, entered
     as ``zeta`` with ``friction_factor`` (lambda) 0. ``model``: ``dynamic`` (eq. 5, the flow is a
-    state) or ``quasi_steady`` (eq. 5 with dq/dt = 0, an algebraic flow).
+    state), ``quasi_steady`` (eq. 5 with dq/dt = 0, an algebraic flow) or ``compressible`` (a
+    finite-volume line of ``cells`` cells, or of cells about ``cell_length_m`` long when ``cells``
+    is 0, that carries pressure waves: :mod:`pneumatics.compressible_pipe`). ``friction_factor``
+    null (compressible pipes only): lambda from the Reynolds number of the flow, laminar to
+    turbulent (:func:`pneumatics.compressible_pipe.darcy_friction_factor`).
     """
 
     a: str
     b: str
     length_m: float = field(default=1.0, metadata=ranged(positive("m")))
     diameter_m: float = field(default=0.018, metadata=plausible(0.0, 0.3, "m", "a pneumatic pipe's bore", low_inclusive=False))
-    friction_factor: float = field(default=0.0, metadata=ranged(nonnegative(why="Darcy friction factor lambda")))
+    friction_factor: Optional[float] = field(default=0.0, metadata=ranged(nonnegative(why="Darcy friction factor lambda")))
     zeta: float = field(default=1.11, metadata=ranged(nonnegative(why="pressure-loss coefficient of fittings")))
     model: str = "dynamic"
+    # compressible pipes only: 0 = from cell_length_m; 1000 cells of a 1 m pipe are 1 mm each,
+    # finer than any wave a suspension excites, and the explicit step shrinks with the cell
+    cells: int = field(default=0, metadata=plausible(0, 1000, "", "cells of a compressible pipe (0: from "
+                                                                    "cell_length_m)"))
+    cell_length_m: float = field(default=0.05, metadata=plausible(0.0, 10.0, "m", "a compressible pipe's target "
+                                                                               "cell length", low_inclusive=False))
 
     @property
     def area_m2(self) -> float:
@@ -38,8 +49,9 @@ class Pipe:
 
     @property
     def loss_coefficient(self) -> float:
-        """lambda L/d + zeta, the factor of the quadratic pressure drop in eq. (5)."""
-        return self.friction_factor * self.length_m / self.diameter_m + self.zeta
+        """lambda L/d + zeta, the factor of the quadratic pressure drop in eq. (5) (lambda null,
+        from the Reynolds number: zeta alone)."""
+        return (self.friction_factor or 0.0) * self.length_m / self.diameter_m + self.zeta
 
 
 @elementwise(7)

@@ -26,6 +26,7 @@ from .chamber import (
     isothermal_heat_flow_W,
     temperature_rate_K_per_s,
 )
+from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
 from .orifice import orifice_flow_kg_per_s
 from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
@@ -126,9 +127,13 @@ class CircuitRuntime:
                                                      f"(chambers: {self.chamber_names})")
         lay = self.layout
         x = np.zeros(lay.size)
+        cells = {}
         for i, n in enumerate(self.chamber_names):
             c = self.components[n]
             p = p0_Pa.get(n, c.p_Pa if isinstance(c, Supply) else c.p0_Pa)
+            if p is None and isinstance(c, PipeCell):    # set from its pipe's ends, below
+                cells[i] = c
+                continue
             if p is None:
                 raise CircuitError([n, "p0_Pa"], "initial pressure is not set")
             if not p > 0:
@@ -138,12 +143,27 @@ class CircuitRuntime:
                 raise CircuitError([n, "T0_K"], "an isothermal (k = inf) chamber must start at the atmosphere's temperature")
             x[lay.T][i] = T
             x[lay.m][i] = self.gas.mass_kg(p, T, self._chambers.V0_m3[i, 0])
+        for i, c in cells.items():                 # a pipe's cell: between its ends' states
+            (p_a, T_a), (p_b, T_b) = (self._node_at_start(x, end) for end in c.ends)
+            p, T = p_a + c.position * (p_b - p_a), T_a + c.position * (T_b - T_a)
+            x[lay.T][i] = T
+            x[lay.m][i] = self.gas.mass_kg(p, T, self._chambers.V0_m3[i, 0])
         air = self._air
         if air.n_compressors:                      # each governor as its reservoir's pressure has it
             x[lay.governor] = self._governors(x[:, None], air.running_at_start)[:, 0]
         if n_cases is None and self.k_W_per_K.ndim:
             n_cases = self.k_W_per_K.size
         return x if n_cases is None else np.repeat(x[:, None], n_cases, axis=1)
+
+    def _node_at_start(self, x: np.ndarray, name: str) -> tuple:
+        """(p, T) of node ``name`` in the initial state ``x`` being built (a chamber's at its
+        nominal volume, a boundary node's given)."""
+        i = self._nodes.index[name]
+        nc = len(self.chamber_names)
+        if i >= nc:
+            return float(self._nodes.p_boundary_Pa[i - nc, 0]), float(self._nodes.T_boundary_K[i - nc, 0])
+        T = x[self.layout.T][i]
+        return self.gas.pressure_Pa(x[self.layout.m][i], T, self._chambers.V0_m3[i, 0]), T
 
     # ----------------------------------------------------------------------------- physics
     def _boundary(self, n_cases: int):
@@ -179,6 +199,11 @@ class CircuitRuntime:
         a, b = links.a, links.b
         w = np.empty((len(a), n_cases))
         w[self._pipes.links] = x2[lay.q]
+        ends = self._pipes.choked
+        if ends is not None:                               # compressible pipes' ends: choked flow
+            p0, T0 = self._end_stagnation(x2[lay.q], m, p_n, T_n)
+            w[ends.rows] = choked_end_flow_kg_per_s(x2[lay.q][ends.rows], ends.area_m2, p0, T0, ends.outflow_sign,
+                                                    gas.R_J_per_kgK, gas.gamma)
         qs = self._quasi_steady
         if qs.count:
             ia, ib = a[qs.links], b[qs.links]
@@ -268,9 +293,14 @@ class CircuitRuntime:
         pa, pb = pipes.a, pipes.b
         dx[lay.q] = pipe_flow_rate_kg_per_s2(x2[lay.q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
                                              pipes.length_m, pipes.area_m2, pipes.loss_coefficient)  # eq. (5)
+        cells = pipes.cells
+        if cells is not None:
+            self._compressible_rates(dx[lay.q], x2[lay.q], m, p_n, T_n, rho_n, w)
         blocked_pipes = self._active.blocked_pipes
         if blocked_pipes is not None:                     # a blocked pipe's air column stands still
             dx[lay.q][blocked_pipes] = 0.0
+        if cells is not None:                             # the cells' kinetic energy, in and out
+            Hdot = Hdot + self._kinetic_energy_rates(x2[lay.q], dx[lay.q], m, mdot, w)
         dx[lay.mass_through] = w
         dx[lay.enthalpy_in] = links.boundary_sign @ Hw
         if self._n_valves:
@@ -285,6 +315,74 @@ class CircuitRuntime:
             dx[lay.compression_work] = np.concatenate([delivered * w_iso, delivered * w_ad])
         return dx, (m, T, p, mdot, Hdot, chain)
 
+    def _end_stagnation(self, q: np.ndarray, m: np.ndarray, p_n, T_n):
+        """The stagnation pressure and temperature of the compressible pipes' end cells (ends,
+        cases): T0 = T + u^2 / (2 c_p), p0 = p (T0 / T)^(gamma / (gamma - 1)), u the cell's velocity."""
+        ends, gas = self._pipes.choked, self.gas
+        flow, _, per_m = self._cell_flows(q, m)
+        u = (flow * per_m)[ends.cell_index]
+        T = T_n[ends.cell]
+        T0 = T + 0.5 * u * u / gas.cp_J_per_kgK
+        return p_n[ends.cell] * (T0 / T) ** (gas.gamma / (gas.gamma - 1.0)), T0
+
+    def _cell_flows(self, q: np.ndarray, m: np.ndarray):
+        """Each cell's mass flow (the mean of its two links'), the flow of its upwind link, and
+        dx / m (so that a flow times it is a velocity)."""
+        cells = self._pipes.cells
+        q_left, q_right = q[cells.left], q[cells.right]
+        flow = 0.5 * (q_left + q_right)
+        return flow, np.where(flow >= 0.0, q_left, q_right), cells.dx_m / m[cells.rows]
+
+    def _compressible_rates(self, dq: np.ndarray, q: np.ndarray, m, p_n, T_n, rho_n, w) -> None:
+        """Write the rates of the compressible pipes' links into ``dq``: eq. (5) with lambda of the
+        Reynolds number where the pipe's is null; on the inner links, the momentum flux rho u^2 A
+        of the cells on either side (upwind); at the ends, q relaxing towards the choked flow w
+        it passes in the link's acoustic time l / c (:mod:`pneumatics.compressible_pipe`)."""
+        gas, cells = self.gas, self._pipes.cells
+        flow, upwind, per_m = self._cell_flows(q, m)
+        momentum = flow * upwind * per_m                     # rho u^2 A = flow x upwind velocity [N]
+        dq[cells.inner] += (momentum[cells.inner_left] - momentum[cells.inner_right]) / cells.inner_length_m
+        ends = self._pipes.choked
+        # an end link the air enters by: Bernoulli from the chamber's air at rest to its cell's,
+        # the dynamic pressure rho u^2 / 2 = momentum / 2A spent; where it leaves, the jet's
+        # dynamic pressure is not regained (its kinetic energy heats the chamber: the exit loss)
+        q_end = q[ends.rows]
+        entering = q_end * ends.outflow_sign < 0.0
+        g = gas.gamma
+        u = (flow * per_m)[ends.cell_index]
+        ratio = np.maximum(1.0 - 0.5 * u * u / (gas.cp_J_per_kgK * T_n[ends.chamber]), 0.0)
+        drop = p_n[ends.chamber] * (1.0 - ratio ** (g / (g - 1.0)))     # isentropic, from rest to u
+        dq[ends.rows] -= np.where(entering, np.sign(q_end) * drop, 0.0) * ends.area_m2 / ends.length_m
+        # a jet leaving the pipe sees no pressure below the critical one of its cell's stagnation
+        # state (below it the jet expands outside the pipe: the exit is choked)
+        p0, _ = self._end_stagnation(q, m, p_n, T_n)
+        p_c = p_n[ends.chamber]
+        floor = np.maximum(p_c, p0 * (2.0 / (g + 1.0)) ** (g / (g - 1.0))) - p_c
+        dq[ends.rows] -= np.where(entering, 0.0, ends.outflow_sign * floor) * ends.area_m2 / ends.length_m
+        fr = self._pipes.reynolds
+        if fr is not None:
+            ia, ib = fr.a, fr.b
+            dq[fr.rows] = segment_flow_rate_kg_per_s2(q[fr.rows], p_n[ia], p_n[ib], 0.5 * (rho_n[ia] + rho_n[ib]),
+                                                      fr.length_m, fr.area_m2, fr.zeta, fr.diameter_m, fr.viscosity_Pa_s)
+        if ends is not None:
+            c = np.sqrt(gas.gamma * gas.R_J_per_kgK * T_n[ends.cell])
+            dq[ends.rows] -= (q[ends.rows] - w[ends.rows]) * c / ends.length_m
+
+    def _kinetic_energy_rates(self, q: np.ndarray, dq: np.ndarray, m, mdot, w) -> np.ndarray:
+        """The kinetic energy the links carry into each node, w u^2 / 2 of the upstream node (a
+        cell's velocity u = its flow dx / m; a chamber's air is at rest), less the rate of change
+        of each cell's own kinetic energy, m u^2 / 2 = flow^2 dx^2 / (2 m): added to the enthalpy
+        flow, the cells and chambers keep internal plus kinetic energy (chambers, cases) [W]."""
+        cells, links = self._pipes.cells, self._links
+        flow, _, per_m = self._cell_flows(q, m)
+        u_n = np.zeros((len(self.node_names), q.shape[1]))
+        u_n[cells.rows] = flow * per_m
+        u_up = np.where(w >= 0.0, u_n[links.a], u_n[links.b])
+        into = links.incidence @ (0.5 * w * u_up * u_up)
+        dflow = 0.5 * (dq[cells.left] + dq[cells.right])
+        into[cells.rows] -= flow * dflow * per_m * cells.dx_m - 0.5 * (flow * per_m) ** 2 * mdot[cells.rows]
+        return into
+
     def _write_crushing_rate_terms(self, dx: np.ndarray, x2: np.ndarray, terms, zdot2: np.ndarray) -> None:
         """Write the rows of d(state)/dt that the crushing rate enters: temperatures (eq. 2, with
         the heat flow of eq. 8 or the isothermal one), heat and work accumulators, valve signals."""
@@ -295,9 +393,16 @@ class CircuitRuntime:
         Qdot = heat_flow_into_W(heat.k_finite_W_per_K, T, self.atmosphere.T_K)   # eq. (8), physical sign
         if heat.any_isothermal:
             Qdot = np.where(heat.isothermal, isothermal_heat_flow_W(T, p, mdot, Hdot, Vdot, cv), Qdot)
+        cells = self._chambers.pipe_cells
+        if cells is not None:                              # compressible pipes' cells: adiabatic
+            Qdot = np.array(np.broadcast_to(Qdot, T.shape))
+            Qdot[cells] = 0.0
         dT = temperature_rate_K_per_s(m, T, p, mdot, Hdot, Qdot, Vdot, cv)       # eq. (2)
         if heat.any_isothermal:
+            dT_cells = dT[cells] if cells is not None else None
             dT = np.where(heat.isothermal, 0.0, dT)
+            if cells is not None:
+                dT[cells] = dT_cells
         dx[lay.T] = dT
         dx[lay.heat_in] = Qdot.sum(axis=0)
         dx[lay.work_in] = -(p * Vdot).sum(axis=0)

@@ -61,10 +61,11 @@ def pipe_of(data, file, where) -> Pipe:
 
 def check_pipe(pipe: Pipe, file, where) -> None:
     """The total loss coefficient lambda L/d + zeta of eq. (5) divides the quasi-steady flow: it
-    must be > 0 (each term is >= 0 by the field rules); reported at ``zeta``, the key one sets."""
-    if not pipe.loss_coefficient > 0:
+    must be > 0 (each term is >= 0 by the field rules); reported at ``zeta``, the key one sets. A
+    compressible pipe may have none (its links' losses divide nothing)."""
+    if pipe.model != "compressible" and not pipe.loss_coefficient > 0:
         raise ScenarioError(file, [*where, "zeta"], "the pressure-loss coefficient lambda L/d + zeta must be > 0 "
-                                                    f"(friction_factor = {pipe.friction_factor:g}, zeta = {pipe.zeta:g})")
+                                                    f"(friction_factor = {pipe.friction_factor or 0:g}, zeta = {pipe.zeta:g})")
 
 
 def optional(cls, data: Mapping, key: str, file, prefix, **fixed):

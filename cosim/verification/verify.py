@@ -2,7 +2,8 @@
 discretisation error by Richardson extrapolation.
 
 Level 0 is the scenario as given; level i divides the macro-step, the multibody step and the
-pneumatic step all by 2^i (the output interval stays, so every level samples the same instants).
+pneumatic step all by 2^i (the output interval stays, so every level samples the same instants)
+and multiplies the cells of every compressible pipe by 2^i.
 For each metric and case, with f_0 .. f_N the values from the coarsest to the finest level,
 the last three give
 
@@ -40,6 +41,8 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 from cosim.results.io import Progress, atomic_write, cell, jsonable, write_rows
 from cosim.scenario.model import Scenario
+from pneumatics.compressible_pipe import COMPRESSIBLE, cell_count
+from pneumatics.pipe import Pipe
 from vehicle.params import WHEELS
 
 #: Differences between levels below this fraction of the scale S count as converged: they are
@@ -109,10 +112,28 @@ def richardson(values: Sequence[float], metric: str = "", case: str = "", floor:
 
 
 def refined(scenario: Scenario, level: int) -> Scenario:
-    """The scenario with every step divided by 2**level."""
+    """The scenario with every step divided by 2**level, and every compressible pipe's cells
+    multiplied by it (its space step halved with the time steps: both second order)."""
     s, factor = scenario.solver, 2.0 ** -level
     solver = dataclasses.replace(s, **{step: getattr(s, step) * factor for step in STEPS})
-    return dataclasses.replace(scenario, solver=solver)
+    return dataclasses.replace(scenario, solver=solver, circuit=finer_pipes(scenario.circuit, 2 ** level))
+
+
+def finer_pipes(circuit, factor: int):
+    """``circuit`` (a car's or a rig's) with the cells of each compressible pipe (its ``pipe``,
+    ``cross_pipe`` and explicit components) multiplied by ``factor``; itself when it has none."""
+    def finer(c):
+        if isinstance(c, Pipe) and c.model == COMPRESSIBLE and factor != 1:
+            return dataclasses.replace(c, cells=cell_count(c) * factor)
+        return c
+    if circuit is None:
+        return circuit
+    changes = {name: finer(getattr(circuit, name)) for name in ("pipe", "cross_pipe") if hasattr(circuit, name)}
+    if getattr(circuit, "explicit", None) is not None:
+        changes["explicit"] = tuple((n, finer(c)) for n, c in circuit.explicit)
+    if all(v is getattr(circuit, k) or (k == "explicit" and v == circuit.explicit) for k, v in changes.items()):
+        return circuit
+    return dataclasses.replace(circuit, **changes)
 
 
 def _case(row: Dict[str, object], columns: Sequence[str] = CASE_COLUMNS) -> str:

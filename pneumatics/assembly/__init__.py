@@ -16,6 +16,7 @@ from typing import FrozenSet, Mapping, Sequence, Tuple
 
 from ..air_supply import free_air_density_kg_per_m3, normal_density_kg_per_m3
 from ..boundary import Atmosphere
+from ..compressible_pipe import expand_compressible_pipes
 from ..faults import Fault
 from ..gas import AIR, Gas
 from .chambers import ChamberGeometry, compile_chambers
@@ -80,12 +81,15 @@ def assemble(components: Mapping[str, object], *, gas: Gas = AIR, atmosphere: At
     faults = tuple(faults)
     active = frozenset(int(i) for i in active_faults)
     heat = compile_heat_exchange(k_W_per_K)
-    nodes = classify_nodes(components, atmosphere)
-    chambers = compile_chambers(components, nodes)
-    compiled = check_faults(faults, active, components, nodes.chamber_names)
-    links = compile_links(compiled, nodes, fault_openings(faults, active, compiled, nodes.chamber_names, gas))
+    # a compressible pipe is cut into its cells (chambers) and links (dynamic pipes) here; the
+    # faults name the components as given, and a ruptured pipe opens at its own ends
+    nodes = classify_nodes(expand_compressible_pipes(components), atmosphere)
+    chambers = compile_chambers(expand_compressible_pipes(components), nodes)
+    given = check_faults(faults, active, components, nodes.chamber_names)
+    compiled = expand_compressible_pipes(given)
+    links = compile_links(compiled, nodes, fault_openings(faults, active, given, nodes.chamber_names, gas))
     valves = compile_levelling_valves(links, nodes)
-    pipes = compile_dynamic_pipes(links)
+    pipes = compile_dynamic_pipes(links, chambers.V0_m3)
     n_pipes = pipes.links.stop - pipes.links.start
     air_supply = compile_air_supply(links, free_air_density_kg_per_m3(atmosphere.p_Pa, atmosphere.T_K, gas.R_J_per_kgK),
                                     normal_density_kg_per_m3(gas.R_J_per_kgK))

@@ -3,11 +3,12 @@ chamber, A_e = A0 + (dA/dz) z over every bellow (or its area table)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Mapping
+from typing import Mapping, Optional
 
 import numpy as np
 
 from ..chamber import Bellow
+from ..compressible_pipe import PipeCell
 from ..errors import CircuitError
 from .arrays import column, read_only
 from .nodes import Nodes
@@ -27,6 +28,7 @@ class ChamberGeometry:
     area_tables: bool
     bellow_chamber: np.ndarray
     bellow_columns: Bellow
+    pipe_cells: Optional[np.ndarray] = None
 
 
 def check_area_table(name: str, bellow: Bellow) -> None:
@@ -63,5 +65,6 @@ def compile_chambers(components: Mapping[str, object], nodes: Nodes) -> ChamberG
     for n, b in zip(nodes.bellow_names, bellows):
         check_area_table(n, b)
     laws = {f: column([getattr(b, f) for b in bellows]) for f in ("V0_m3", "dV_dz_m2", "A0_m2", "dA_dz_m")}
+    cells = [i for i, n in enumerate(nodes.chamber_names) if isinstance(components[n], PipeCell)]
     return ChamberGeometry(column(V0), read_only(Ez), laws["A0_m2"], laws["dA_dz_m"], any(b.area_table_z_m for b in bellows),
-                           read_only(bellow_chamber), Bellow(**laws))
+                           read_only(bellow_chamber), Bellow(**laws), read_only(np.array(cells, dtype=int)) if cells else None)

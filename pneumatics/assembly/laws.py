@@ -5,10 +5,11 @@ levelling valves' levers and conductance tables."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Tuple
+from typing import Optional, Tuple
 
 import numpy as np
 
+from ..compressible_pipe import AIR_VISCOSITY_PA_S, PipeSegment
 from .arrays import column, read_only, rows, table_groups
 from .links import Links
 from .nodes import Nodes
@@ -16,9 +17,59 @@ from .valve_dynamics import ValveDynamics, compile_valve_dynamics
 
 
 @dataclass(frozen=True, eq=False)
+class ReynoldsFriction:
+    """The compressible pipes' links whose lambda follows the Reynolds number: their rows among
+    the pipe-flow states, their ends' node rows, l, A, their share of zeta, d, mu (rows, 1)."""
+
+    rows: object
+    a: object
+    b: object
+    length_m: np.ndarray
+    area_m2: np.ndarray
+    zeta: np.ndarray
+    diameter_m: np.ndarray
+    viscosity_Pa_s: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class ChokedEnds:
+    """The end links of the compressible pipes, whose flow out of the pipe is limited to the
+    choked flow of their cell: their rows among the pipe-flow states (= link rows), their cells'
+    node rows, A, l and the sign of a flow out of the pipe (-1 at end a, +1 at b) (rows, 1); their
+    cells' indices among :class:`PipeCells`."""
+
+    rows: object
+    cell: np.ndarray
+    area_m2: np.ndarray
+    length_m: np.ndarray
+    outflow_sign: np.ndarray
+    cell_index: np.ndarray = None
+    chamber: np.ndarray = None
+
+
+@dataclass(frozen=True, eq=False)
+class PipeCells:
+    """The compressible pipes' cells as their links see them: each cell's chamber row, the rows
+    of its left (towards a) and right links among the pipe-flow states (an end cell's are both
+    its inner link: its velocity is that link's, not the end link's, which may be choked), its
+    length dx (cells, 1); the inner links' rows, the indices (among the cells) of the cell on each side of them and
+    their lengths (inner links, 1)."""
+
+    rows: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    dx_m: np.ndarray
+    inner: np.ndarray
+    inner_left: np.ndarray
+    inner_right: np.ndarray
+    inner_length_m: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
 class DynamicPipes:
     """Pipes whose flow is a state (eq. 5): their links (the first ones, in the order of the
-    pipe-flow states), their ends' node rows, and each pipe's L, A, K (pipes, 1)."""
+    pipe-flow states), their ends' node rows, and each pipe's L, A, K (pipes, 1); the links of
+    compressible pipes with Reynolds friction and their end links (None: none)."""
 
     links: slice
     a: object
@@ -26,6 +77,9 @@ class DynamicPipes:
     length_m: np.ndarray
     area_m2: np.ndarray
     loss_coefficient: np.ndarray
+    reynolds: Optional[ReynoldsFriction] = None
+    choked: Optional[ChokedEnds] = None
+    cells: Optional[PipeCells] = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,11 +171,57 @@ def compile_air_supply(links: Links, rho_free_kg_per_m3: float, rho_normal_kg_pe
                      dp_off)
 
 
-def compile_dynamic_pipes(links: Links) -> DynamicPipes:
-    """The numbers of eq. (5) over the dynamic pipes."""
+def compile_dynamic_pipes(links: Links, V0_m3: Optional[np.ndarray] = None) -> DynamicPipes:
+    """The numbers of eq. (5) over the dynamic pipes (``V0_m3``: the chambers' volumes, which
+    give a compressible pipe's cells their length)."""
     sl = links.rows["pipe"]
     L, A, K = _columns(links.parameters["pipe"], 3)
-    return DynamicPipes(sl, rows(links.a[sl]), rows(links.b[sl]), L, A, K)
+    items = [item for _, item in links.sources["pipe"]]
+    re_rows = [i for i, c in enumerate(items) if isinstance(c, PipeSegment) and c.friction_factor is None]
+    end_rows = [i for i, c in enumerate(items) if isinstance(c, PipeSegment) and c.end]
+    reynolds = choked = None
+    a, b = links.a[sl], links.b[sl]
+    if re_rows:
+        segs = [items[i] for i in re_rows]
+        reynolds = ReynoldsFriction(rows(re_rows), rows(a[re_rows]), rows(b[re_rows]),
+                                    *(column([getattr(c, f) for c in segs]) for f in ("length_m", "area_m2", "zeta",
+                                                                                      "diameter_m")),
+                                    column([AIR_VISCOSITY_PA_S] * len(segs)))
+    if end_rows:
+        segs = [items[i] for i in end_rows]
+    cells = _pipe_cells(items, a, b, V0_m3)
+    if end_rows:
+        segs = [items[i] for i in end_rows]
+        cell = np.where([c.end == "a" for c in segs], b[end_rows], a[end_rows])
+        index = {int(c): j for j, c in enumerate(cells.rows)}
+        choked = ChokedEnds(rows(end_rows), read_only(cell), column([c.area_m2 for c in segs]),
+                            column([c.length_m for c in segs]), column([-1.0 if c.end == "a" else 1.0 for c in segs]),
+                            read_only(np.array([index[int(c)] for c in cell], dtype=int)),
+                            read_only(np.where([c.end == "a" for c in segs], a[end_rows], b[end_rows])))
+    return DynamicPipes(sl, rows(a), rows(b), L, A, K, reynolds, choked, cells)
+
+
+def _pipe_cells(items: list, a: np.ndarray, b: np.ndarray, V0_m3) -> Optional[PipeCells]:
+    """The cells of the compressible pipes among the dynamic links ``items`` (ends a, b)."""
+    segs = [i for i, c in enumerate(items) if isinstance(c, PipeSegment)]
+    if not segs:
+        return None
+    left = {int(b[i]): i for i in segs if items[i].end != "b"}     # a cell is the b end of its left link
+    right = {int(a[i]): i for i in segs if items[i].end != "a"}
+    cells = list(left)
+    for c in cells:             # an end cell moves with its inner link (the end link's flow may be choked)
+        if items[left[c]].end and not items[right[c]].end:
+            left[c] = right[c]
+        elif items[right[c]].end and not items[left[c]].end:
+            right[c] = left[c]
+    index = {cell: j for j, cell in enumerate(cells)}
+    inner = [i for i in segs if not items[i].end]
+    area = np.array([items[left[c]].area_m2 for c in cells])
+    return PipeCells(read_only(np.array(cells, dtype=int)), read_only(np.array([left[c] for c in cells], dtype=int)),
+                     read_only(np.array([right[c] for c in cells], dtype=int)), column(V0_m3[cells, 0] / area),
+                     read_only(np.array(inner, dtype=int)), read_only(np.array([index[int(a[i])] for i in inner], dtype=int)),
+                     read_only(np.array([index[int(b[i])] for i in inner], dtype=int)),
+                     column([items[i].length_m for i in inner]))
 
 
 def compile_quasi_steady_pipes(links: Links) -> QuasiSteadyPipes:

@@ -8,6 +8,8 @@ name and ends), the checks of their values, and the numbers of its flow law:
 link type (``key``)   from                    link name                    law's numbers
 ====================  ======================  ===========================  ==================
 ``pipe``              dynamic pipe            ``<pipe>``                   L, A, K (eq. 5)
+                      compressible pipe's     ``<pipe>``, ``<pipe>.seg<i>``  l, A, K of its share
+                      links                                                (eq. 5 per link)
 ``quasi_steady_pipe`` quasi-steady pipe       ``<pipe>``                   A, K (eq. 5, steady)
 ``orifice``           orifice                 ``<orifice>``                C, b (eqs 6-7)
 ``fault_opening``     a fault's opening       ``<component>.<kind>``       C (0 while inactive), b
@@ -28,6 +30,7 @@ from typing import Mapping, NamedTuple, Sequence, Tuple
 import numpy as np
 
 from ..air_supply import AirDemand, Compressor
+from ..compressible_pipe import COMPRESSIBLE, PipeSegment
 from ..errors import CircuitError
 from ..orifice import Orifice
 from ..pipe import Pipe
@@ -117,12 +120,22 @@ class PipeLinks(LinkType):
 
 
 class DynamicPipeLinks(PipeLinks):
-    """Pipes whose flow is a state: (L/A) dq/dt = dp - K q|q| / (2 rho A^2) (eq. 5)."""
+    """Pipes whose flow is a state: (L/A) dq/dt = dp - K q|q| / (2 rho A^2) (eq. 5); and the
+    links of the compressible pipes (:mod:`pneumatics.compressible_pipe`), each over its length,
+    with its share of the fittings' loss (which may be 0: its K need not be > 0)."""
 
     key, model = "pipe", "dynamic"
 
+    def takes(self, comp) -> bool:
+        return isinstance(comp, PipeSegment) or super().takes(comp)
+
     def parameters(self, name: str, pipe: Pipe) -> tuple:
         return pipe.length_m, pipe.area_m2, pipe.loss_coefficient
+
+    def check(self, name: str, comp) -> None:
+        if isinstance(comp, PipeSegment):             # its pipe was checked when it was cut into links
+            return
+        super().check(name, comp)
 
 
 class QuasiSteadyPipeLinks(PipeLinks):
@@ -280,5 +293,5 @@ class AirDemandLinks(LinkType):
 LINK_TYPES = (DynamicPipeLinks(), QuasiSteadyPipeLinks(), OrificeLinks(), FaultOpeningLinks(), DifferentialValveLinks(),
               ValveSupplyLinks(), ValveExhaustLinks(), CompressorLinks(), AirDemandLinks())
 
-#: the pipe models, one link type each
-PIPE_MODELS = (DynamicPipeLinks.model, QuasiSteadyPipeLinks.model)
+#: the pipe models: one link type each, a compressible pipe made of dynamic links and cells
+PIPE_MODELS = (DynamicPipeLinks.model, QuasiSteadyPipeLinks.model, COMPRESSIBLE)

@@ -8,6 +8,7 @@ from typing import Mapping, Sequence, Tuple
 
 import numpy as np
 
+from ..compressible_pipe import PipeSegment
 from ..errors import CircuitError
 from ..pipe import Pipe
 from .arrays import read_only
@@ -41,7 +42,7 @@ def compile_links(components: Mapping[str, object], nodes: Nodes, openings: Sequ
     """The links of ``components`` and of the faults' ``openings``, each end checked
     (:func:`_end_nodes`); then every link's values checked, component by component."""
     for n, c in components.items():
-        if isinstance(c, Pipe) and c.model not in PIPE_MODELS:
+        if isinstance(c, Pipe) and not isinstance(c, PipeSegment) and c.model not in PIPE_MODELS:
             raise CircuitError([n, "model"], f"expected one of {PIPE_MODELS}, got '{c.model}'")
     names, ends, rows, sources, parameters = [], [], {}, {}, {}
     for link_type in LINK_TYPES:
