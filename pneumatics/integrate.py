@@ -38,6 +38,7 @@ def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1):
         return z, zd
     return motion
 
+
 #: RK4's step for the compressible pipes' fastest (undamped) wave, h omega_max with omega_max =
 #: 2 c / dx = c / l_end: RK4 is stable on the imaginary axis up to 2.83, and its amplitude error
 #: per step there is (h omega)^6 / 144 (1.8e-3 at 1.2 for a mode that is numerical noise anyway)
