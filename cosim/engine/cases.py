@@ -3,6 +3,7 @@ one car per k value, the cases shared out over a pool of processes, gathered int
 Dataset (:mod:`cosim.results.series`)."""
 from __future__ import annotations
 
+import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
@@ -16,6 +17,7 @@ from cosim.results.io import Progress
 from cosim.results.series import car_dataset, concat_cases
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import k_label
+from pneumatics.compiled import compile_laws
 from pneumatics.integrate import stable_step_s
 from pneumatics.layouts import static_pressures
 from vehicle.params import BELLOWS
@@ -109,7 +111,10 @@ def simulate_variants(variants: Sequence[Scenario], make_car: CarFactory, durati
     if len(tasks) == 1:
         done = [_run_chunks(tasks[0])]
     else:
-        with ProcessPoolExecutor(len(tasks), initializer=install_in_worker) as pool:
+        context = multiprocessing.get_context()         # the pool's default
+        if context.get_start_method() == "fork":        # the workers inherit what this process loaded:
+            compile_laws()                              # numba and the laws, once here, not in each
+        with ProcessPoolExecutor(len(tasks), mp_context=context, initializer=install_in_worker) as pool:
             done = list(pool.map(_run_chunks, tasks))
     per_variant: List[Tuple[list, List[str]]] = [([], []) for _ in variants]
     for share, results in zip(shares, done):
