@@ -387,10 +387,8 @@ class CoSimulation:
         """Stop every running case whose bellows are crushed flat or, with ``cars``, whose car
         is in a state no car can be in (:class:`~cosim.limits.watch.StateWatch`)."""
         fractions = self.circuit.bellow_volume_fractions(z1)
-        # one test of every case's bellows: the per-case one only for a case that has a flat one
-        flat = (fractions < self.watch.limits.bellow_volume_fraction).any(axis=0)
-        for j in np.flatnonzero(self.active & (flat | cars)):
-            reason = (self.watch.bellows(fractions[:, j], self.circuit.bellow_names, t1) if flat[j] else None) or \
+        for j in np.flatnonzero(self.active):
+            reason = self.watch.bellows(fractions[:, j], self.circuit.bellow_names, t1) or \
                 (self.watch.car(j, self.cars[j], t1) if cars else None)
             if reason:
                 self._stop(j, f"impossible state: {reason}")

@@ -87,39 +87,6 @@ def test_air_outside_physics_stops_its_case_only():
     assert "60 bar" in hot[0]
 
 
-def test_the_master_stops_exactly_the_cases_with_a_flat_bellow_or_an_impossible_car():
-    """CoSimulation._stop_impossible_cars tests every case's bellows at once, then names the flat
-    bellow of each case that has one; the cars are asked only on the watching steps."""
-    from cosim.engine.master import CoSimulation
-
-    class Circuit:
-        bellow_names = ("FL", "FR", "RL", "RR")
-
-        def bellow_volume_fractions(self, z):
-            return 1.0 - z
-
-    class Master:
-        _stop_impossible_cars = CoSimulation._stop_impossible_cars
-
-        def __init__(self, cars):
-            self.circuit, self.cars, self.watch = Circuit(), cars, StateWatch(StateLimits(), len(cars), H0)
-            self.active, self.stopped = np.ones(len(cars), dtype=bool), []
-
-        def _stop(self, j, reason):
-            self.active[j] = False
-            self.stopped.append((j, reason))
-
-    z = np.zeros((4, 3))
-    z[2, 1] = 0.99                                     # case 1: bellow RL at 1 % of its volume
-    overturned = FakeCar(roll=(0.3, 0.0, 0.0))
-    m = Master([FakeCar(), FakeCar(), overturned])
-    m._stop_impossible_cars(z, 1.0, False)             # not a watching step: the bellows only
-    assert [(j, r.split(" at t")[0]) for j, r in m.stopped] == [(1, "impossible state: bellow RL crushed to 1.0 % of "
-                                                                    "its volume")]
-    m._stop_impossible_cars(z, 1.02, True)             # case 1 stopped already; case 2's car overturned
-    assert [j for j, _ in m.stopped] == [1, 2] and "carbody rolled" in m.stopped[1][1]
-
-
 # ---------------------------------------------------------------------------- flexible track
 from cosim.limits.criteria import largest_track_twist  # noqa: E402
 from cosim.runs.track_run import track_twist_warnings  # noqa: E402
