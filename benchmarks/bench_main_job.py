@@ -166,8 +166,9 @@ def main(argv=None) -> int:
         rs = runs[name]
         line = f"{name:>8} {statistics.median(r['wall'] for r in rs):7.2f} {statistics.median(r['cpu'] for r in rs):7.2f}   "
         if all("stages" in r for r in rs):
-            line += "  ".join(f"{statistics.median(r['stages'][s][0] for r in rs):6.2f} /{statistics.median(r['stages'][s][1] for r in rs):6.2f}"
-                              for s in (*STAGES, "outside"))
+            def median(stage, i):
+                return statistics.median(r["stages"][stage][i] for r in rs)
+            line += "  ".join(f"{median(s, 0):6.2f} /{median(s, 1):6.2f}" for s in (*STAGES, "outside"))
         print(line)
     if args.json:
         args.json.write_text(json.dumps(runs, indent=1))
