@@ -69,32 +69,11 @@ class _Lazy:
     def __init__(self, fn: Callable, make: Callable):
         self.py_func, self._make, self._call = fn, make, None
         self.__doc__, self.__name__, self.__wrapped__ = fn.__doc__, fn.__name__, fn
-        _LAWS.append(self)
-
-    def compile(self) -> None:
-        """Compile now (load from the cache) rather than on the first call."""
-        if self._call is None:
-            self._call = _compiled(self.py_func, self._make)
 
     def __call__(self, *args, **kwargs):
         if self._call is None:
-            self.compile()
+            self._call = _compiled(self.py_func, self._make)
         return self._call(*args, **kwargs)
-
-
-#: every law of :func:`elementwise` and :func:`arrays` defined so far (:func:`compile_laws`)
-_LAWS: list = []
-
-
-def compile_laws() -> None:
-    """Compile every law defined so far, now: for a process about to fork workers that evaluate
-    circuits (:mod:`cosim.engine.cases`). The workers inherit numba and the laws' machine code
-    instead of each importing numba, initialising its compiler and loading the laws from the
-    cache (~0.4 s of CPU per worker, measured on the twist's main job; in the parent once, ~0.45
-    s). An :func:`arrays` law still compiles for its argument types on its first call (from the
-    cache: milliseconds)."""
-    for law in list(_LAWS):
-        law.compile()
 
 
 def elementwise(n_args: int) -> Callable[[Callable], Callable]:

@@ -121,14 +121,3 @@ def test_a_law_compiles_without_the_cache_when_a_source_changed_or_the_cache_is_
         assert compiled._compiled(law, make)(2.0, 3.0) == 7.0
     assert made == [False, True, False]
     assert law.__qualname__.endswith(compiled._DIGEST)
-
-
-def test_compile_laws_compiles_every_law_now_and_the_numbers_stay():
-    """What the car pool's parent calls before forking its workers (cosim.engine.cases): every
-    law compiled at once, then called directly, with the same numbers."""
-    from pneumatics import compiled
-    args = (np.array([0.01, -0.02]), 5e5, 4.9e5, 6.0, 1.5, 2.5e-4, 1.11)
-    before = pipe_flow_rate_kg_per_s2.py_func(*[a if np.ndim(a) else np.float64(a) for a in args])
-    compiled.compile_laws()
-    assert compiled._LAWS and all(law._call is not None for law in compiled._LAWS)
-    np.testing.assert_array_equal(pipe_flow_rate_kg_per_s2(*args), before)
