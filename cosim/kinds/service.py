@@ -283,9 +283,11 @@ def stop_rows(case: xr.Dataset, service: Service) -> List[Dict[str, object]]:
               if "valve" in case.dims else [np.zeros((len(t), 0))])
     open_s = np.concatenate(valves, axis=1)
     injected = case["air_from_supply_kg"].values
+    recorded = np.flatnonzero(np.isfinite(injected))
+    t_last = t[recorded[-1]] if recorded.size else -math.inf   # a case that stopped early is NaN after
     rows = []
     for n, stop in enumerate(service.plan.stops):
-        if stop.depart_s > t[-1] + 1e-9:
+        if stop.depart_s > t_last + 1e-9:
             break                                         # the run stopped before this stop ended
         dz = sides[stop.platform_side] - sides[stop.platform_side][0]
         i_arr, i_open, i_close, i_dep = (_at(t, x) for x in (stop.arrive_s, stop.open_s, stop.close_s, stop.depart_s))
