@@ -13,7 +13,6 @@ import argparse
 import contextlib
 import logging
 import math
-import os
 import signal
 import sys
 import time
@@ -517,18 +516,5 @@ def _run(args) -> int:
     return EXIT_FAILED if outcome.diverged else EXIT_OK
 
 
-def entry() -> None:
-    """The ``pneumorail`` command (and ``python -m cosim.cli``): :func:`main`, then the process
-    ends once its output and log are flushed, without tearing the interpreter down: freeing every
-    module and object of numpy, xarray, scipy, pandas and exudyn took 0.3 s of CPU (and of wall
-    time) after every command, 3 % of the twist's main job. Every file is written and closed by
-    then (atomically, :mod:`cosim.results.io`) and every process pool joined."""
-    code = main()
-    logging.shutdown()
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)
-
-
 if __name__ == "__main__":
-    entry()
+    sys.exit(main())
