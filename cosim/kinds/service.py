@@ -44,9 +44,10 @@ from cosim.runs.route import LineCurve, LineStation, Plan, RoutePayload, plan, r
 from cosim.runs.track_run import plane_roll_rad
 from cosim.runs.track_spec import CANT, MAX_TRACK_LENGTH_M, RADIUS, SPEED, TRANSITION
 from cosim.scenario.model import Scenario
-from cosim.scenario.payload import PayloadSettings
+from cosim.scenario.payload import PayloadSchedule, PayloadSettings
 from cosim.scenario.schema import build, check_keys, check_valve_settings, describe, is_key, k_label, set_at_load
 from pneumatics.air_supply import normal_density_kg_per_m3
+from pneumatics.gas import AIR
 from pneumorail.quantities import plausible, ranged
 from vehicle.params import VehicleParams
 from vehicle.track import TRANSITION_SHAPES
@@ -218,10 +219,9 @@ def with_payload(service: Service, payload, path: Path) -> Service:
         raise ScenarioError(path, ["payload", "events"], "a service's passengers alight and board at its stations "
                                                          "(service.stations[i].alighting / boarding): leave "
                                                          "payload.events out (initial and the reference masses stay)")
-    settings = payload.settings if payload is not None else PayloadSettings()
-    initial = payload.initial_kg if payload is not None else 0.0
-    service = dataclasses.replace(service, payload_settings=settings, initial_kg=initial)
-    crush = (payload if payload is not None else _schedule(settings)).exceptional_payload_kg
+    payload = payload if payload is not None else PayloadSchedule(PayloadSettings(), 0.0, ())
+    service = dataclasses.replace(service, payload_settings=payload.settings, initial_kg=payload.initial_kg)
+    crush = payload.exceptional_payload_kg
     for stop in service.plan.stops:
         if not -1e-9 * crush <= stop.on_board_kg <= crush * (1 + 1e-12):
             i = [st.name for st in service.stations].index(stop.name)
@@ -232,11 +232,6 @@ def with_payload(service: Service, payload, path: Path) -> Service:
                                 f"({'outwards' if stop.direction == 'out' else 'on the way back'}): expected between none "
                                 f"and the exceptional payload, {crush:.0f} kg")
     return service
-
-
-def _schedule(settings: PayloadSettings):
-    from cosim.scenario.payload import PayloadSchedule
-    return PayloadSchedule(settings, 0.0, ())
 
 
 def duration_s(service: Service) -> float:
@@ -274,6 +269,11 @@ def _at(t: np.ndarray, when: float) -> int:
     return int(np.argmin(np.abs(t - when)))
 
 
+def _worst(row: np.ndarray) -> float:
+    """The signed value of largest magnitude."""
+    return float(row[np.argmax(np.abs(row))])
+
+
 def stop_rows(case: xr.Dataset, service: Service) -> List[Dict[str, object]]:
     """One row per stop of a case (module docstring); the floor relative to the platform, i.e. its
     height at the doors at t = 0."""
@@ -292,15 +292,14 @@ def stop_rows(case: xr.Dataset, service: Service) -> List[Dict[str, object]]:
         dz = sides[stop.platform_side] - sides[stop.platform_side][0]
         i_arr, i_open, i_close, i_dep = (_at(t, x) for x in (stop.arrive_s, stop.open_s, stop.close_s, stop.depart_s))
         doors = dz[i_open:i_close + 1]
-        worst = lambda row: float(row[np.argmax(np.abs(row))])
         outside = np.flatnonzero(np.any(np.abs(dz[i_open:i_dep + 1]) > service.tolerance_m, axis=1))
         relevel = 0.0 if not outside.size else (math.nan if outside[-1] == i_dep - i_open else
                                                 float(t[i_open + outside[-1] + 1] - t[i_open]))
         rows.append({"stop": n + 1, "station": stop.name, "direction": stop.direction, "platform_side": stop.platform_side,
                      "arrive_s": stop.arrive_s, "depart_s": stop.depart_s,
                      "alighting_kg": stop.alighting_kg, "boarding_kg": stop.boarding_kg, "on_board_kg": stop.on_board_kg,
-                     "floor_dz_arrive_m": worst(dz[i_arr]), "floor_dz_min_m": float(doors.min()),
-                     "floor_dz_max_m": float(doors.max()), "floor_dz_close_m": worst(dz[i_close]),
+                     "floor_dz_arrive_m": _worst(dz[i_arr]), "floor_dz_min_m": float(doors.min()),
+                     "floor_dz_max_m": float(doors.max()), "floor_dz_close_m": _worst(dz[i_close]),
                      "relevel_s": relevel, "valve_openings": openings(open_s[i_arr:i_dep + 1]),
                      "air_injected_kg": float(injected[i_dep] - injected[i_arr])})
     return rows
@@ -334,13 +333,12 @@ def run(scenario: Scenario, progress: Progress) -> Computed:
              f"{route.duration_s / 60:.1f} min; {len(scenario.k_W_per_K)} k values")
     ds, diagnoses = simulate_cases(scenario, settings, make_car, duration_s(service), progress, outputs(service))
     rows, table, found = [], [], []
-    gas = scenario.circuit.compile().gas
     for j, (k, valves) in enumerate(zip(ds["k_W_per_K"].values, ds["valves"].values)):
         case = ds.isel(case=j)
         stops = stop_rows(case, service)
         head = {"valves": bool(valves), "k_W_per_K": float(k)}
         table += [{**head, **r} for r in stops]
-        rows.append({**head, **case_row(stops, case, service, gas), **fault_columns(scenario, case)})
+        rows.append({**head, **case_row(stops, case, service, AIR), **fault_columns(scenario, case)})
         missed = [r["station"] for r in stops if abs(r["floor_dz_close_m"]) > service.tolerance_m]
         if missed:
             warn(found, f"k = {k_label(float(k))}: the floor misses +-{service.tolerance_m * 1e3:g} mm at door close at "
@@ -372,16 +370,17 @@ def figures(outcome: Outcome) -> List[Figure]:
         suffix = "" if setting is None else f"_valves={'on' if setting else 'off'}"
         valves = "" if setting is None else f", valves {'connected' if setting else 'isolated'}"
         at_close, centre = [], []
+        t = sub["time"].values
+        roll = plane_roll_rad(service.plan.track, service.plan.offset_m + service.plan.speed.distance(t),
+                              scenario.vehicle.bogie_x_m)
+        plane = [y * np.sin(roll) for y in (service.door_y_m, -service.door_y_m)]   # the rail plane at each side's doors
         for c, k in zip(sub["case"].values, sub["k_W_per_K"].values):
             mine = [r for r in stops if r["k_W_per_K"] == float(k) and (setting is None or r["valves"] == setting)]
             n = np.array([r["stop"] for r in mine], dtype=float)
             at_close += [Curve(n, np.array([r["floor_dz_close_m"] for r in mine]) * 1e3, f"door close, {k_legend(float(k))}"),
                          Curve(n, np.array([r["floor_dz_arrive_m"] for r in mine]) * 1e3, f"arrival, {k_legend(float(k))}")]
-            t = sub["time"].values
-            roll = plane_roll_rad(service.plan.track, service.plan.offset_m + service.plan.speed.distance(t),
-                                  scenario.vehicle.bogie_x_m)
-            for side, y in zip(SIDES, (service.door_y_m, -service.door_y_m)):
-                z = sub[f"floor_{side}_z_m"].sel(case=c, floor_point="centre").values - y * np.sin(roll)
+            for side, z_plane in zip(SIDES, plane):
+                z = sub[f"floor_{side}_z_m"].sel(case=c, floor_point="centre").values - z_plane
                 centre.append(Curve(t, (z - z[0]) * 1e3, f"{side} centre door, {k_legend(float(k))}"))
         out += [Figure(f"floor_at_stops{suffix}.png",
                        [Panel(at_close, "stop number (route order; stops.csv names them)",
