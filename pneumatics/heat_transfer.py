@@ -31,7 +31,11 @@ area), steady (the wall stores no heat):
   Ra_D <= 1e12; Int. J. Heat Mass Transfer 18 (1975) 1049), combined as inside with forced
   convection at a steady air speed across the chamber (``air_speed_m_per_s``, default 0: still
   air), a cylinder in cross flow (Churchill & Bernstein, eq. 7.54, Re_D Pr >= 0.2; J. Heat
-  Transfer 99 (1977) 300; the tank's axis assumed across the flow).
+  Transfer 99 (1977) 300; the tank's axis assumed across the flow); in parallel with radiation to
+  surroundings at the atmosphere's temperature, h_rad = eps sigma (T_w + T_atm)(T_w^2 + T_atm^2)
+  (eq. 1.9; a grey surface of emissivity eps, ``emissivity``, 0.9 assumed: in still air it is as
+  large as the natural convection). Inside, dry air neither emits nor absorbs, and the walls
+  see each other at one temperature: no radiation.
 
 The air's properties are those of the film, T_f = (T + T_wall) / 2, on each side: viscosity and
 conductivity by Sutherland's law (White, *Viscous Fluid Flow*, 3rd ed., McGraw-Hill 2006, eqs 1-36
@@ -73,6 +77,11 @@ STEEL_CONDUCTIVITY_W_PER_MK = 50.0
 PORT_DIAMETER_M = 0.018
 #: a tank's length over its diameter when its diameter is not given (assumed)
 TANK_LENGTH_PER_DIAMETER = 2.0
+#: the outside surface's emissivity, rubber or painted steel (assumed; non-metallic and painted
+#: surfaces are 0.8-0.95, Incropera Table A.11)
+EMISSIVITY = 0.9
+#: Stefan-Boltzmann constant [W/(m^2 K^4)] (CODATA 2018)
+STEFAN_BOLTZMANN = 5.670374419e-8
 
 #: standard gravity [m/s^2]
 GRAVITY_M_PER_S2 = 9.80665
@@ -100,7 +109,8 @@ class ChamberHeat:
     ``wall_thickness_m`` and ``wall_conductivity_W_per_mK`` (a bellow's rubber: 6 mm, 0.25 W/(m
     K); a tank's steel: 3 mm, 50 W/(m K)), ``diameter_m`` (a tank's: null, two diameters long; a
     bellow's follows from its effective area), ``port_diameter_m`` (the bore air enters by: 18
-    mm, Table 1's pipe), ``air_speed_m_per_s`` (air across the chamber outside: 0, still air).
+    mm, Table 1's pipe), ``air_speed_m_per_s`` (air across the chamber outside: 0, still air),
+    ``emissivity`` (of its outside: 0.9; 0 leaves radiation out).
     """
 
     model: str = "constant"
@@ -115,10 +125,12 @@ class ChamberHeat:
         0.0, 0.3, "m", "the bore of a chamber's port", low_inclusive=False))
     air_speed_m_per_s: Optional[float] = field(default=None, metadata=plausible(
         0.0, 100.0, "m/s", "air across the chamber outside: 0 still air, 100 m/s = 360 km/h"))
+    emissivity: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 1.0, "", "of a grey surface: 0 none (radiation left out), 1 black"))
 
     #: the correlation's own keys (refused with ``model: constant``)
     CORRELATION_KEYS = ("wall_thickness_m", "wall_conductivity_W_per_mK", "diameter_m", "port_diameter_m",
-                        "air_speed_m_per_s")
+                        "air_speed_m_per_s", "emissivity")
 
 
 def bellow_surface(A_e_m2, V_m3):
@@ -190,15 +202,16 @@ def _rayleigh(dT_K, L_m, k, mu, rho, cp, beta):
     return GRAVITY_M_PER_S2 * beta * abs(dT_K) * L_m ** 3 * rho * rho * cp / (mu * k)
 
 
-@elementwise(14)
+@elementwise(15)
 def wall_conductance_W_per_K(T_K, rho_kg_per_m3, inflow_kg_per_s, T_atm_K, p_atm_Pa, area_m2, height_m, diameter_m,
-                             port_area_m2, wall_m2K_per_W, air_speed_m_per_s, cylinder, cp, R):
+                             port_area_m2, wall_m2K_per_W, air_speed_m_per_s, emissivity, cylinder, cp, R):
     """k = 1 / (1 / (h_in A) + t / (lambda A) + 1 / (h_out A)) [W/K] of a chamber of air at T_K and
     density rho, ``inflow_kg_per_s`` flowing in through a port of area ``port_area_m2``, of
     surface ``area_m2``, height ``height_m`` (the inside natural convection's length; a bellow's
     outside too) and diameter ``diameter_m`` (its cross-section pi D^2 / 4, the inside forced
     convection's length, the outside cylinder's), wall resistance t / lambda ``wall_m2K_per_W``,
-    in still air at T_atm, p_atm or in ``air_speed_m_per_s`` across it; ``cylinder`` 1.0 (a tank):
+    in still air at T_atm, p_atm or in ``air_speed_m_per_s`` across it, radiating with
+    ``emissivity`` to surroundings at T_atm; ``cylinder`` 1.0 (a tank):
     outside a horizontal cylinder, 0.0 (a bellow): a vertical plate. Module docstring: the
     equations. Compiled (:mod:`pneumatics.compiled`)."""
     p_in = rho_kg_per_m3 * R * T_K
@@ -222,7 +235,8 @@ def wall_conductance_W_per_K(T_K, rho_kg_per_m3, inflow_kg_per_s, T_atm_K, p_atm
             h_natural = vertical_plate_nusselt(_rayleigh(T_wall_out - T_atm_K, height_m, k, mu, rho, cp, beta),
                                                Pr) * k / height_m
         h_forced = cross_flow_cylinder_nusselt(rho * air_speed_m_per_s * diameter_m / mu, Pr) * k / diameter_m
-        h_out = (h_natural ** 3 + h_forced ** 3) ** (1.0 / 3.0)
+        h_radiation = emissivity * STEFAN_BOLTZMANN * (T_wall_out + T_atm_K) * (T_wall_out ** 2 + T_atm_K ** 2)
+        h_out = (h_natural ** 3 + h_forced ** 3) ** (1.0 / 3.0) + h_radiation
         resistance = 1.0 / h_in + wall_m2K_per_W + 1.0 / h_out
         flux = dT / resistance
         T_wall_in = T_K - flux / h_in

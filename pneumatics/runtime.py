@@ -330,7 +330,8 @@ class CircuitRuntime:
             else:
                 area, height, diameter = g.area_m2, g.height_m, g.diameter_m
             out.append(wall_conductance_W_per_K(T[r], m[r] / V[r], inflow, atm.T_K, atm.p_Pa, area, height, diameter,
-                                                g.port_area_m2, g.wall_m2K_per_W, g.air_speed_m_per_s, g.cylinder,
+                                                g.port_area_m2, g.wall_m2K_per_W, g.air_speed_m_per_s, g.emissivity,
+                                                g.cylinder,
                                                 gas.cp_J_per_kgK, gas.R_J_per_kgK))
         return out
 

@@ -13,6 +13,7 @@ import numpy as np
 from ..chamber import Bellow, Tank
 from ..errors import CircuitError
 from ..heat_transfer import (
+    EMISSIVITY,
     HEAT_MODELS,
     PORT_DIAMETER_M,
     RUBBER_CONDUCTIVITY_W_PER_MK,
@@ -35,7 +36,7 @@ class CorrelationGroup:
     indices (None: tanks); the incidence of the links on them and its magnitude (the air flowing
     in: (|E| @ |w| + E @ w) / 2); a tank's surface, height (its diameter: it lies) and diameter
     (None for bellows: they follow the crushing); the port's area, the wall's resistance t /
-    lambda and the outside air speed; 1.0 for a tank (outside a horizontal cylinder), 0.0 for a
+    lambda, the outside air speed and emissivity; 1.0 for a tank (outside a horizontal cylinder), 0.0 for a
     bellow (a vertical plate). Columns (rows, 1)."""
 
     rows: np.ndarray
@@ -48,6 +49,7 @@ class CorrelationGroup:
     port_area_m2: np.ndarray
     wall_m2K_per_W: np.ndarray
     air_speed_m_per_s: np.ndarray
+    emissivity: np.ndarray
     cylinder: float
 
 
@@ -124,9 +126,11 @@ def check_law(name: str, chamber, V_m3: Optional[float]) -> ChamberHeat:
     if law.k_W_per_K is not None:
         raise CircuitError([*where, "k_W_per_K"], "the correlation computes k: remove it, or give model: constant")
     for key in ChamberHeat.CORRELATION_KEYS:
-        value, still_air = getattr(law, key), key == "air_speed_m_per_s"
-        if value is not None and not (math.isfinite(value) and (value >= 0 if still_air else value > 0)):
-            raise CircuitError([*where, key], f"must be finite and {'>= 0' if still_air else '> 0'}, got {value}")
+        value, zero_allowed = getattr(law, key), key in ("air_speed_m_per_s", "emissivity")
+        if value is not None and not (math.isfinite(value) and (value >= 0 if zero_allowed else value > 0)):
+            raise CircuitError([*where, key], f"must be finite and {'>= 0' if zero_allowed else '> 0'}, got {value}")
+    if law.emissivity is not None and law.emissivity > 1.0:
+        raise CircuitError([*where, "emissivity"], f"must be at most 1 (a black surface), got {law.emissivity}")
     if V_m3 is None and law.diameter_m is not None:
         raise CircuitError([*where, "diameter_m"], "a bellow's diameter follows from its effective area: "
                                                    "diameter_m is a tank's")
@@ -164,4 +168,5 @@ def _correlations(laws: Mapping[str, ChamberHeat], components, nodes: Nodes, cha
                             else None, incidence, read_only(np.abs(incidence)), *geometry,
                             column([0.25 * math.pi * d * d for d in port]),
                             column([t / lam for t, lam in zip(thickness, conductivity)]),
-                            column(given("air_speed_m_per_s", 0.0)), 0.0 if rubber else 1.0)
+                            column(given("air_speed_m_per_s", 0.0)), column(given("emissivity", EMISSIVITY)),
+                            0.0 if rubber else 1.0)

@@ -44,7 +44,7 @@ def held(z_m: float):
 # ------------------------------------------------------------------------- cooling after a step
 def test_a_closed_bellow_cools_after_a_step_compression_as_the_correlations_k_says():
     """The paper's bellow, closed, crushed by 20 mm in 50 ms (the air heats by ~30 K, adiabatic:
-    its time constant M c_v / k is ~60 s), then held: at constant volume and mass the first law
+    its time constant M c_v / k is ~25 s), then held: at constant volume and mass the first law
     is M c_v dT/dt = k (T_atm - T) (docs/models.md), k the correlation's at the state."""
     circuit = Circuit({"b": Bellow(p0_Pa=P0_PA, heat=CORRELATION)}, k_W_per_K=123.0)   # the case's k: unused
     step = simulate(circuit, circuit.initial_state(), 0.05, ramp_motion(0.02, 0.05), rtol=RTOL)
@@ -65,15 +65,16 @@ def test_a_closed_bellow_cools_after_a_step_compression_as_the_correlations_k_sa
     assert np.all(dT >= dT[0] * np.exp(-k[0] * t / C) - slack)
     assert np.all(dT <= dT[0] * np.exp(-k * t / C) + slack)
     # the analytic exponential with the correlation's k at the step, while the air cools by the
-    # first 10 %: k changes there by (1 - k_end/k_0) (2.4 % measured), so the exponent by at most
-    # that fraction of k_0 t / C <= ln(1/0.9): a bound of 0.3 % on dT, computed, not assumed
+    # first 10 %: k changes there by (1 - k_end/k_0) (1.9 % measured), so the exponent by at most
+    # that fraction of k_0 t / C <= ln(1/0.9): a bound of 0.2 % on dT (0.1 % measured), computed
+    # from the run's own k, not assumed. Beyond it the exponential drifts: +9 % at t = M c_v / k_0
     window = dT >= 0.9 * dT[0]
     exponential = dT[0] * np.exp(-k[0] * t / C)
     bound = (1.0 - k[window][-1] / k[0]) * k[0] * t[window][-1] / C
-    assert bound < 0.004
+    assert bound < 0.003
     assert np.max(np.abs(dT[window] / exponential[window] - 1.0)) <= bound
-    # and the exact solution over three time constants: t(dT) = C int_dT^dT0 ds / (s k(s)), k(s)
-    # the correlation at T_atm + s and the bellow's constant density
+    # and the exact solution over the whole cooling (30 K to 0.2 K in 180 s): t(dT) = C int_dT^dT0
+    # ds / (s k(s)), k(s) the correlation at T_atm + s and the bellow's constant density
     x = np.repeat(sol.y[:, :1], 2, axis=1)
 
     def k_at(s):
@@ -82,7 +83,7 @@ def test_a_closed_bellow_cools_after_a_step_compression_as_the_correlations_k_sa
     for i in (100, 300, 600, 900):
         t_exact = C * quad(lambda s: 1.0 / (s * k_at(s)), dT[i], dT[0], epsabs=0.0, epsrel=1e-10)[0]
         assert t_exact == pytest.approx(t[i], rel=1e-6, abs=1e-6)
-    assert dT[-1] < 0.1 * dT[0]                             # three time constants: cooled
+    assert dT[-1] < 0.01 * dT[0]                            # cooled
 
 
 # ------------------------------------------------------------------------- the single-k model kept
@@ -207,7 +208,8 @@ def nu_cross_flow(Re, Pr):              # eq. 7.54
 
 def hand_k(T, p, inflow, geometry, wall, air_speed, tank):
     """k = A q / |T - T_atm|, q the flux through inside film, wall and outside film in series
-    (eq. 9.64 mixes natural and forced convection on each side); the films' temperature
+    (eq. 9.64 mixes natural and forced convection on each side; outside, radiation in parallel,
+    emissivity 0.9, surroundings at T_atm); the films' temperature
     differences found by root solves of h(d) d = q, q by a root solve of their sum."""
     area, height, D, port_area = geometry
     rho_c = p / (AIR.R_J_per_kgK * T)
@@ -228,7 +230,9 @@ def hand_k(T, p, inflow, geometry, wall, air_speed, tank):
         h_n = (nu_horizontal_cylinder(ra(d, D, Tf, P_ATM_PA), Pr) * k / D if tank
                else nu_vertical_plate(ra(d, height, Tf, P_ATM_PA), Pr) * k / height)
         h_f = nu_cross_flow(air_speed * D / nu, Pr) * k / D if air_speed > 0 else 0.0
-        return (h_n ** 3 + h_f ** 3) ** (1 / 3)
+        T_wall = T_ATM_K + sign * d
+        h_r = 0.9 * 5.670374419e-8 * (T_wall + T_ATM_K) * (T_wall ** 2 + T_ATM_K ** 2)   # eq. 1.9, eps 0.9
+        return (h_n ** 3 + h_f ** 3) ** (1 / 3) + h_r
 
     def film(h, q):
         return brentq(lambda d: h(d) * d - q, 0.0, size, xtol=1e-15, rtol=1e-15)
@@ -277,13 +281,13 @@ def test_the_correlations_k_is_the_hand_computation(label, z, T, inflow, air_spe
     assert float(circuit.heat_conductances_W_per_K(x, np.array([z] * (not tank)))[0, 0]) == pytest.approx(at_rest, rel=1e-6)
 
 
-def test_the_paper_chambers_ks_at_rest_and_the_forced_flows_share():
-    """The numbers docs/models.md quotes: the paper's bellow and tank, 5 K above the atmosphere,
-    still air, no flow: k ~0.7 and ~0.9 W/K; the inside film is most of the bellow's resistance."""
-    T = T_ATM_K + 5.0
-    bellow = hand_k(T, P0_PA, 0.0, _bellow_geometry(0.0), 0.006 / 0.25, 0.0, False)
-    tank = hand_k(T, P0_PA, 0.0, _tank_geometry(0.027), 0.003 / 50, 0.0, True)
-    assert 0.5 < bellow < 1.0 and 0.6 < tank < 1.2
+def test_the_paper_chambers_k_at_rest_as_docs_models_quotes_it():
+    """The paper's bellow and tank at 4 bar, 5 K above the atmosphere, still air, no flow."""
+    circuit = Circuit(_rig(CORRELATION, CORRELATION))
+    x = circuit.initial_state()
+    x[circuit.layout.T] += 5.0
+    k = circuit.heat_conductances_W_per_K(x, np.zeros(1))[:, 0]
+    assert k == pytest.approx([1.24, 1.68], rel=0.01)
 
 
 def test_the_air_properties_are_incroperas_table_a4():
@@ -301,7 +305,7 @@ def test_the_compiled_law_is_its_python_source():
     args = [T_ATM_K + rng.uniform(-100, 120, n), 10 ** rng.uniform(-0.5, 1.3, n), rng.choice([0.0, 0.01, 1.0], n),
             np.full(n, T_ATM_K), np.full(n, P_ATM_PA), rng.uniform(0.1, 2.0, n), rng.uniform(0.05, 1.0, n),
             rng.uniform(0.1, 1.0, n), np.full(n, 2.5e-4), rng.choice([6e-5, 0.024], n), rng.choice([0.0, 25.0], n),
-            rng.choice([0.0, 1.0], n), np.full(n, AIR.cp_J_per_kgK), np.full(n, AIR.R_J_per_kgK)]
+            rng.choice([0.0, 0.9], n), rng.choice([0.0, 1.0], n), np.full(n, AIR.cp_J_per_kgK), np.full(n, AIR.R_J_per_kgK)]
     compiled = wall_conductance_W_per_K(*args)
     python = np.array([wall_conductance_W_per_K.py_func(*(a[i] for a in args)) for i in range(n)])
     np.testing.assert_allclose(compiled, python, rtol=1e-13, atol=0.0)
@@ -318,6 +322,7 @@ def test_the_compiled_law_is_its_python_source():
     (ChamberHeat("correlation", diameter_m=0.3), ["b", "heat", "diameter_m"], "a tank's"),
     (ChamberHeat("correlation", wall_thickness_m=0.0), ["b", "heat", "wall_thickness_m"], "> 0"),
     (ChamberHeat("correlation", air_speed_m_per_s=-1.0), ["b", "heat", "air_speed_m_per_s"], ">= 0"),
+    (ChamberHeat("correlation", emissivity=1.5), ["b", "heat", "emissivity"], "at most 1"),
     (ChamberHeat("correlation", port_diameter_m=0.5), ["b", "heat", "port_diameter_m"], "wider than its port"),
     ("hot", ["b", "heat"], "expected a ChamberHeat"),
 ])

@@ -529,6 +529,8 @@ HEAT = {  # a chamber's own heat exchange (circuit.bellow.heat, circuit.tank.hea
                                  {"circuit.bellow.heat": {"model": "correlation", "wall_thickness_m": 6}}),
     "negative air speed": Case("twist", "circuit.tank.heat.air_speed_m_per_s", "[0, 100] m/s",
                                {"circuit.tank.heat": {"model": "correlation", "air_speed_m_per_s": -5}}),
+    "emissivity above 1": Case("ramp", "circuit.tank.heat.emissivity", "[0, 1]",
+                               {"circuit.tank.heat": {"model": "correlation", "emissivity": 1.5}}),
     "a tank narrower than its port": Case("ramp", "circuit.tank.heat.diameter_m", "wider than its port",
                                           {"circuit.tank.heat": {"model": "correlation", "diameter_m": 0.01}}),
     "an explicit component's heat": Case("explicit", "circuit.components.tank_FL.heat.wall_conductivity_W_per_mK",
