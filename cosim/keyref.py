@@ -22,6 +22,7 @@ from pneumatics.air_supply import AirDemand, Compressor
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.faults import Fault
+from pneumatics.heat_transfer import ChamberHeat
 from pneumatics.orifice import Orifice
 from pneumatics.pipe import Pipe
 from pneumatics.valves import DifferentialPressureValve, LevellingValve, SafetyValve
@@ -48,6 +49,10 @@ CAR_SECTIONS = (
 CIRCUIT_SECTIONS = (
     ("circuit.bellow", Bellow, "also `type: bellow` in circuit.components"),
     ("circuit.tank", Tank, "also `type: tank`; `tank: null` = no tank"),
+    ("circuit.bellow.heat, circuit.tank.heat", ChamberHeat, "also `heat:` of a `type: bellow` or `type: tank` in "
+                                                            "circuit.components; null (the default): the case's k "
+                                                            "(`k_W_per_K`); equations, sources, validity and assumed "
+                                                            "values: docs/models.md, \"Heat transfer per chamber\""),
     ("circuit.pipe, circuit.cross_pipe", Pipe, "also `type: pipe`; a, b: the nodes it joins; `cross_pipe: null` = none"),
     ("circuit.supply", Supply, "also `type: supply`"),
     ("circuit.levelling_valve", LevellingValve, "also `type: levelling_valve`; `{}`: the defaults; null is refused "

@@ -13,6 +13,7 @@ import numpy as np
 from pneumorail.quantities import plausible, ranged
 
 from .gas import ABSOLUTE_PRESSURE, AIR_TEMPERATURE
+from .heat_transfer import ChamberHeat
 
 #: ranges of the chambers' fields (metadata). An airspring's effective area: the paper's 0.13 m^2,
 #: the largest rail airsprings ~0.5 m^2 (a value in cm^2 is ~1e4 times too large)
@@ -37,6 +38,9 @@ class Bellow:
     (``area_table_z_m``, increasing) and area (``area_table_m2``): A_e(z) interpolated linearly
     between the points and held at the end values beyond them (``A0_m2``, ``dA_dz_m`` are then
     not used). Manufacturers give A_e against height; crushing is nominal height minus height.
+
+    ``heat``: its own heat exchange (:class:`~pneumatics.heat_transfer.ChamberHeat`); None, the
+    case's k (eq. 8).
     """
 
     V0_m3: float = field(default=0.012, metadata=_BELLOW_VOLUME)
@@ -50,6 +54,7 @@ class Bellow:
     T0_K: Optional[float] = field(default=None, metadata=ranged(AIR_TEMPERATURE))
     area_table_z_m: Tuple[float, ...] = field(default=(), metadata=plausible(-0.5, 0.5, "m", "crushing from the static height"))
     area_table_m2: Tuple[float, ...] = field(default=(), metadata=_AREA)
+    heat: Optional[ChamberHeat] = None
 
     def volume_m3(self, z_m):
         return self.V0_m3 - self.dV_dz_m2 * z_m
@@ -74,11 +79,16 @@ class Bellow:
 
 @dataclass(frozen=True)
 class Tank:
-    """A rigid chamber (auxiliary tank, or a finite main reservoir). Table 1: 27 dm^3."""
+    """A rigid chamber (auxiliary tank, or a finite main reservoir). Table 1: 27 dm^3.
+
+    ``heat``: its own heat exchange (:class:`~pneumatics.heat_transfer.ChamberHeat`); None, the
+    case's k (eq. 8).
+    """
 
     V_m3: float = field(default=0.027, metadata=VESSEL_VOLUME)
     p0_Pa: Optional[float] = field(default=None, metadata=ranged(ABSOLUTE_PRESSURE))
     T0_K: Optional[float] = field(default=None, metadata=ranged(AIR_TEMPERATURE))
+    heat: Optional[ChamberHeat] = None
 
 
 def bellow_force_N(A_e_m2, p_Pa, p_atm_Pa):

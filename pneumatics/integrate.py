@@ -52,9 +52,15 @@ def stable_step_s(circuit: Circuit, x: np.ndarray, h_max_s: float = 1e-3, couran
     that mode by 0.27 instead of exp(-1.5) = 0.22: a fast transient decaying a little slower, with
     the slow thermal state itself unaffected. ``h_max_s`` bounds the step for the pipe mode; a
     compressible pipe's fastest wave bounds it too (:data:`ACOUSTIC_COURANT`); its cells, which
-    exchange no heat, do not count in the thermal rate.
+    exchange no heat, do not count in the thermal rate. A correlation's k (a chamber's own law,
+    :mod:`pneumatics.heat_transfer`) counts at ``x``, the crushing at 0 (a few W/K: its rate is far
+    below the finite k of the cases a step must resolve).
     """
-    k = circuit.assembly.heat.k_finite_W_per_K
+    heat = circuit.assembly.heat
+    k = heat.k_finite_W_per_K
+    if heat.correlations:
+        z = np.zeros((len(circuit.bellow_names),) + x.shape[1:])
+        k = np.where(heat.isothermal, 0.0, circuit.heat_conductances_W_per_K(x, z))
     ends, cells = circuit.assembly.pipes.choked, circuit.assembly.chambers.pipe_cells
     if ends is not None:                     # compressible pipes: their fastest wave, 2 c / dx
         gas = circuit.gas

@@ -128,12 +128,20 @@ def periodic_steady_state(circuit: Circuit, x_start: np.ndarray, period_s: np.nd
         for i, j in enumerate(free):
             dY = (Y[:nd, (i + 1) * n_cases:(i + 2) * n_cases] - Y[:nd, :n_cases])[free] / scale[free, None]
             mono[:, :, i] = (dY / (eps[i] / scale[j])).T
-        if circuit.assembly.heat.any_isothermal:
+        heat = circuit.assembly.heat
+        if heat.any_isothermal and not heat.per_chamber:
             # Held temperatures are not states of an isothermal case: drop them from the map.
             held = np.isin(free, np.arange(lay.T.start, lay.T.stop))
-            iso = np.broadcast_to(circuit.assembly.heat.isothermal, (n_cases,))
+            iso = np.broadcast_to(heat.isothermal, (n_cases,))
             mono[np.ix_(iso, held, np.arange(nf))] = 0.0
             mono[np.ix_(iso, np.arange(nf), held)] = 0.0
+        elif heat.any_isothermal:
+            # ... nor of an isothermal chamber (its own k = inf, or its case's): per case
+            iso = np.broadcast_to(heat.isothermal, (lay.n_chambers, n_cases))
+            temperature = (free >= lay.T.start) & (free < lay.T.stop)
+            held = np.zeros((n_cases, nf), bool)
+            held[:, temperature] = iso[free[temperature] - lay.T.start].T
+            mono[held[:, :, None] | held[:, None, :]] = 0.0
         mono[~np.isfinite(mono)] = np.nan
         finite = np.all(np.isfinite(mono), axis=(1, 2))
         floquet = np.full(n_cases, np.nan)

@@ -28,6 +28,7 @@ from .chamber import (
 )
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
+from .heat_transfer import bellow_surface, wall_conductance_W_per_K
 from .orifice import orifice_flow_kg_per_s
 from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
 from .valve_signals import lever_chain, set_at_rest, signal_rates
@@ -139,7 +140,7 @@ class CircuitRuntime:
             if not p > 0:
                 raise CircuitError([n, "p0_Pa"], f"must be > 0 (absolute pressure), got {p}")
             T = getattr(c, "T0_K", None) or getattr(c, "T_K", None) or self.atmosphere.T_K
-            if np.any(self._heat.isothermal) and T != self.atmosphere.T_K:
+            if np.any(self._heat.isothermal_of(i)) and T != self.atmosphere.T_K:
                 raise CircuitError([n, "T0_K"], "an isothermal (k = inf) chamber must start at the atmosphere's temperature")
             x[lay.T][i] = T
             x[lay.m][i] = self.gas.mass_kg(p, T, self._chambers.V0_m3[i, 0])
@@ -313,7 +314,26 @@ class CircuitRuntime:
             w_iso, w_ad = compression_work_J_per_kg(p[air.reservoir], atm.p_Pa, atm.T_K, self.gas)
             delivered = w[air.compressor_links]
             dx[lay.compression_work] = np.concatenate([delivered * w_iso, delivered * w_ad])
-        return dx, (m, T, p, mdot, Hdot, chain)
+        conductances = self._correlation_conductances(m, T, V, w, mdot, z2) if self._heat.correlations else None
+        return dx, (m, T, p, mdot, Hdot, chain, conductances)
+
+    def _correlation_conductances(self, m, T, V, w, mdot, z2) -> list:
+        """k [W/K] of the chambers a correlation serves, (rows, cases) per group
+        (:func:`pneumatics.heat_transfer.wall_conductance_W_per_K`): at their temperature and
+        density, the air flowing in, a bellow's surface at its crushing."""
+        gas, atm, out = self.gas, self.atmosphere, []
+        for g in self._heat.correlations:
+            r = g.rows
+            inflow = 0.5 * (g.abs_incidence @ np.abs(w) + mdot[r])
+            if g.bellows is not None:
+                area, height, diameter = bellow_surface(self._bellow_areas_m2(z2)[g.bellows], V[r])
+            else:
+                area, height, diameter = g.area_m2, g.height_m, g.diameter_m
+            out.append(wall_conductance_W_per_K(T[r], m[r] / V[r], inflow, atm.T_K, atm.p_Pa, area, height, diameter,
+                                                g.port_area_m2, g.wall_m2K_per_W, g.air_speed_m_per_s, g.emissivity,
+                                                g.cylinder,
+                                                gas.cp_J_per_kgK, gas.R_J_per_kgK))
+        return out
 
     def _end_stagnation(self, q: np.ndarray, m: np.ndarray, p_n, T_n):
         """The stagnation pressure and temperature of the compressible pipes' end cells (ends,
@@ -387,10 +407,14 @@ class CircuitRuntime:
         """Write the rows of d(state)/dt that the crushing rate enters: temperatures (eq. 2, with
         the heat flow of eq. 8 or the isothermal one), heat and work accumulators, valve signals."""
         lay, heat = self.layout, self._heat
-        m, T, p, mdot, Hdot, chain = terms
+        m, T, p, mdot, Hdot, chain, conductances = terms
         cv = self.gas.cv_J_per_kgK
         Vdot = -self._chambers.Ez_m2 @ zdot2
         Qdot = heat_flow_into_W(heat.k_finite_W_per_K, T, self.atmosphere.T_K)   # eq. (8), physical sign
+        if conductances is not None:                       # a correlation's k, at this state
+            Qdot = np.array(np.broadcast_to(Qdot, T.shape))
+            for g, k in zip(heat.correlations, conductances):
+                Qdot[g.rows] = heat_flow_into_W(k, T[g.rows], self.atmosphere.T_K)
         if heat.any_isothermal:
             Qdot = np.where(heat.isothermal, isothermal_heat_flow_W(T, p, mdot, Hdot, Vdot, cv), Qdot)
         cells = self._chambers.pipe_cells
@@ -408,6 +432,21 @@ class CircuitRuntime:
         dx[lay.work_in] = -(p * Vdot).sum(axis=0)
         if self._dynamics.present:
             dx[lay.valve_signal] = signal_rates(self._dynamics, x2[lay.valve_signal], chain, self._valves.lever_play, zdot2)
+
+    def heat_conductances_W_per_K(self, x, z_m) -> np.ndarray:
+        """Each chamber's k [W/K] at state ``x`` and crushing ``z_m``, (chambers, cases): its case's,
+        its own constant one (inf: isothermal), or its correlation's at this state (eq. 8: the
+        heat flow into it is k (T_atm - T); a compressible pipe's cells exchange none whatever k)."""
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z_m, x2)
+        heat = self._heat
+        k = np.array(np.broadcast_to(np.where(heat.isothermal, np.inf, heat.k_finite_W_per_K),
+                                     (self.layout.n_chambers, x2.shape[1])))
+        if heat.correlations:
+            m, T, V, _, _, _, _, w, _, _ = self._evaluate(x2, z2)
+            for g, kg in zip(heat.correlations, self._correlation_conductances(m, T, V, w, self._links.incidence @ w, z2)):
+                k[g.rows] = kg
+        return k
 
     def evaluate(self, x, z_m) -> "Evaluation":
         """The circuit at state ``x`` and crushing ``z_m`` (pressures, volumes, flows: everything
@@ -454,25 +493,27 @@ class CircuitRuntime:
 
     def bellow_forces_N(self, x, z_m) -> np.ndarray:
         """Eq. (4) for every bellow; shapes follow ``z_m`` (bellows[, cases])."""
-        chambers = self._chambers
         z = np.asarray(z_m, float)
         x2 = x.reshape(self.layout.size, -1)
         z2 = self._per_bellow(z, x2)
-        if chambers.area_tables:
-            A = np.stack([self.components[b].area_m2(z2[i]) for i, b in enumerate(self.bellow_names)])
-        else:
-            A = chambers.A0_m2 + chambers.dA_dz_m * z2
-        F = bellow_force_N(A, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
+        F = bellow_force_N(self._bellow_areas_m2(z2), self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
         return F.reshape(z.shape)
+
+    def _bellow_areas_m2(self, z2: np.ndarray) -> np.ndarray:
+        """Each bellow's effective area A_e(z) (eq. 4) at crushing ``z2`` (bellows, cases)."""
+        chambers = self._chambers
+        if chambers.area_tables:
+            return np.stack([self.components[b].area_m2(z2[i]) for i, b in enumerate(self.bellow_names)])
+        return chambers.A0_m2 + chambers.dA_dz_m * z2
 
     def bellow_stiffness_N_per_m(self, x, z_m) -> np.ndarray:
         """Instantaneous dF/dz of each bellow (air in the pipe cannot move instantly): adiabatic,
-        or isothermal when k = inf. The co-simulation master uses it to linearise the force over a step."""
+        or isothermal when its k = inf. The co-simulation master uses it to linearise the force over a step."""
         z = np.asarray(z_m, float)
         x2 = x.reshape(self.layout.size, -1)
         z2 = self._per_bellow(z, x2)
         p = self.bellow_pressures_Pa(x2, z2)
-        n = np.where(self._heat.isothermal, 1.0, self.gas.gamma)
+        n = np.where(self._heat.isothermal_of(self._chambers.bellow_chamber), 1.0, self.gas.gamma)
         if self._chambers.area_tables:
             K = np.stack([bellow_stiffness_N_per_m(self.components[b], z2[i], p[i], self.atmosphere.p_Pa, n)
                           for i, b in enumerate(self.bellow_names)])

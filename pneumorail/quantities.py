@@ -36,9 +36,13 @@ class Range(NamedTuple):
     nonzero: bool = False
     #: 0 (an absent component) and inf (a rigid one) allowed besides the bounds
     zero_or_inf: bool = False
+    #: +inf allowed besides the bounds: a limit the model computes exactly (k = inf, isothermal)
+    infinite: bool = False
 
     def admits(self, v: float) -> bool:
         if self.zero_or_inf and (v == 0 or v == math.inf):
+            return True
+        if self.infinite and v == math.inf:
             return True
         if self.nonzero and v == 0:
             return False
@@ -65,6 +69,8 @@ class Range(NamedTuple):
             text += f" other than 0{u}"
         if self.zero_or_inf:
             text = f"0 (none), inf (rigid) or{text}"
+        if self.infinite:
+            text += " or .inf"
         text = text.strip()
         return text + (f" ({self.why})" if self.why else "")
 
@@ -99,10 +105,11 @@ def ranged(rule: Optional[Range] = None, *, non_empty: bool = False, unique: boo
 
 def plausible(low: Optional[float], high: Optional[float], unit: str = "", why: str = "", *,
               low_inclusive: bool = True, high_inclusive: bool = True, nonzero: bool = False,
-              zero_or_inf: bool = False, non_empty: bool = False, unique: bool = False) -> Dict[str, object]:
+              zero_or_inf: bool = False, infinite: bool = False, non_empty: bool = False,
+              unique: bool = False) -> Dict[str, object]:
     """Field metadata of the range [``low``, ``high``] ``unit`` (``why``: what the bounds rest on),
     see :class:`Range` and :func:`ranged`."""
-    return ranged(Range(low, high, low_inclusive, high_inclusive, unit, why, nonzero, zero_or_inf),
+    return ranged(Range(low, high, low_inclusive, high_inclusive, unit, why, nonzero, zero_or_inf, infinite),
                   non_empty=non_empty, unique=unique)
 
 

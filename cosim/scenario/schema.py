@@ -3,12 +3,15 @@
 One generic mechanism serves every parameter dataclass (pneumatic components, vehicle
 parameters, test definitions): field types come from the dataclass annotations; every number
 must be finite (``.inf`` only where the field's default is infinite, where it means something:
-an infinite supply reservoir, a rigid damper mounting); and every number must lie in its range:
+an infinite supply reservoir, a rigid damper mounting, or where its range admits it: a chamber's
+own k = inf, isothermal); and every number must lie in its range:
 the one its field declares next to it, as metadata (:mod:`pneumorail.quantities`), else the one
 of its unit suffix (:data:`SUFFIX_RANGES`: a quantity such as a volume, a mass, an absolute
 pressure or a duration is > 0). Lists are checked element by element, and for being non-empty
-and free of duplicates where their field says so (metadata too). The checks are pure functions of the data: the first field in
-error, in the dataclass's field order, is reported, whatever the interpreter's hash seed.
+and free of duplicates where their field says so (metadata too). A field whose type is a dataclass
+is a nested mapping, built by the same rules (its errors name the nested key). The checks are pure
+functions of the data: the first field in error, in the dataclass's field order, is reported,
+whatever the interpreter's hash seed.
 """
 from __future__ import annotations
 
@@ -187,6 +190,8 @@ def coerce(value: Any, tp, file, path: Sequence[str], allow_inf: bool = False):
         if not isinstance(value, str):
             raise ScenarioError(file, path, f"expected a string, got {describe(value)}")
         return value
+    if dataclasses.is_dataclass(tp):                # a nested section (a chamber's heat: {...})
+        return build(tp, value, file, path)
     raise TypeError(f"unsupported field type {tp!r}")
 
 
@@ -232,13 +237,14 @@ def build(cls, data: Any, file, path: Sequence[str], **fixed):
                 raise ScenarioError(file, [*path, name], f"missing required key ({_type_name(hints[name])})")
             continue
         where = [*path, name]
-        value = coerce(data[name], hints[name], file, where, allow_inf=_infinite_default(f))
         rule = range_of(cls, name)
+        infinite = rule is not None and rule.infinite             # .inf is a limit the field admits
+        value = coerce(data[name], hints[name], file, where, allow_inf=_infinite_default(f) or infinite)
         if isinstance(value, tuple):
             for i, v in enumerate(value):
                 check_range(v, rule, file, _item_path(where, i))
             check_list(value, list_rule_of(cls, name), file, where)
-        elif isinstance(value, float) and math.isinf(value):      # only where the default is .inf
+        elif isinstance(value, float) and math.isinf(value) and not infinite:   # where the default is .inf
             if value != f.default:
                 raise ScenarioError(file, where, f"expected a finite number or .inf, got {value}")
         else:

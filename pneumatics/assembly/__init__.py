@@ -1,9 +1,9 @@
 """A circuit's components compiled, once, into the arrays its evaluation reads (:class:`Assembly`).
 
-:func:`assemble` checks the description and builds, in this order: the heat exchange
-(:mod:`.heat`), the nodes (:mod:`.nodes`) and the chambers' geometry (:mod:`.chambers`), the
-faults (:mod:`.faults`), the links from the table of link types (:mod:`.link_types`,
-:mod:`.links`), the numbers of each flow law (:mod:`.laws`, with the valves' response dynamics,
+:func:`assemble` checks the description and builds, in this order: the cases' k, the nodes
+(:mod:`.nodes`) and the chambers' geometry (:mod:`.chambers`), the faults (:mod:`.faults`), the
+links from the table of link types (:mod:`.link_types`, :mod:`.links`), the heat exchange, each
+chamber's own law included (:mod:`.heat`), the numbers of each flow law (:mod:`.laws`, with the valves' response dynamics,
 :mod:`.valve_dynamics`; the compressors and air demands), the state layout (:mod:`.layout`) and what the active faults change.
 An error in the description is a :class:`~pneumatics.errors.CircuitError` naming the field.
 The evaluation at a state is :class:`pneumatics.runtime.CircuitRuntime`'s.
@@ -21,7 +21,7 @@ from ..faults import Fault
 from ..gas import AIR, Gas
 from .chambers import ChamberGeometry, compile_chambers
 from .faults import ActiveFaults, check_faults, compile_active_faults, fault_openings
-from .heat import HeatExchange, compile_heat_exchange
+from .heat import HeatExchange, case_k, compile_heat_exchange
 from .laws import (
     AirSupply,
     DifferentialValves,
@@ -80,7 +80,7 @@ def assemble(components: Mapping[str, object], *, gas: Gas = AIR, atmosphere: At
     per case or one for all."""
     faults = tuple(faults)
     active = frozenset(int(i) for i in active_faults)
-    heat = compile_heat_exchange(k_W_per_K)
+    k = case_k(k_W_per_K)
     # a compressible pipe is cut into its cells (chambers) and links (dynamic pipes) here; the
     # faults name the components as given, and a ruptured pipe opens at its own ends
     nodes = classify_nodes(expand_compressible_pipes(components), atmosphere)
@@ -88,6 +88,7 @@ def assemble(components: Mapping[str, object], *, gas: Gas = AIR, atmosphere: At
     given = check_faults(faults, active, components, nodes.chamber_names)
     compiled = expand_compressible_pipes(given)
     links = compile_links(compiled, nodes, fault_openings(faults, active, given, nodes.chamber_names, gas))
+    heat = compile_heat_exchange(k, compiled, nodes, chambers, links)
     valves = compile_levelling_valves(links, nodes)
     pipes = compile_dynamic_pipes(links, chambers.V0_m3)
     n_pipes = pipes.links.stop - pipes.links.start

@@ -504,10 +504,46 @@ SEMANTICS = {  # values each in range that cannot be meant together: refused bef
                                                 "checks": ["Y_2m_p50[zone=straight] <= 60000"]}),
 }
 
+HEAT = {  # a chamber's own heat exchange (circuit.bellow.heat, circuit.tank.heat, a component's heat)
+    "negative own k": Case("ramp", "circuit.bellow.heat.k_W_per_K", ">= 0 W/K or .inf",
+                           {"circuit.bellow.heat": {"k_W_per_K": -1.0}}),
+    "minus infinite own k": Case("twist", "circuit.tank.heat.k_W_per_K", ">= 0 W/K or .inf",
+                                 {"circuit.tank.heat": {"k_W_per_K": -INF}}),
+    "nan own k": Case("ramp", "circuit.tank.heat.k_W_per_K", "finite", {"circuit.tank.heat": {"k_W_per_K": NAN}}),
+    "string for own k": Case("ramp", "circuit.bellow.heat.k_W_per_K", "expected a number, got a string",
+                             {"circuit.bellow.heat": {"k_W_per_K": "high"}}),
+    "number for the heat law": Case("ramp", "circuit.bellow.heat", "expected a mapping of ChamberHeat parameters",
+                                    {"circuit.bellow.heat": 10}),
+    "unknown heat key": Case("ramp", "circuit.bellow.heat.h_W_per_m2K", "unknown key for ChamberHeat",
+                             {"circuit.bellow.heat": {"model": "correlation", "h_W_per_m2K": 5}}),
+    "unknown heat model": Case("twist", "circuit.bellow.heat.model", "expected one of constant, correlation",
+                               {"circuit.bellow.heat": {"model": "radiation"}}),
+    "a constant law without its k": Case("ramp", "circuit.tank.heat.k_W_per_K", "needs its k", {"circuit.tank.heat": {}}),
+    "a correlation given a k": Case("ramp", "circuit.bellow.heat.k_W_per_K", "the correlation computes k",
+                                    {"circuit.bellow.heat": {"model": "correlation", "k_W_per_K": 5}}),
+    "a correlation key on a constant law": Case("twist", "circuit.bellow.heat.wall_thickness_m", "model: correlation",
+                                                {"circuit.bellow.heat": {"k_W_per_K": 5, "wall_thickness_m": 0.005}}),
+    "a bellow given a diameter": Case("ramp", "circuit.bellow.heat.diameter_m", "a tank's",
+                                      {"circuit.bellow.heat": {"model": "correlation", "diameter_m": 0.4}}),
+    "wall thickness in mm": Case("ramp", "circuit.bellow.heat.wall_thickness_m", "millimetres? (6 millimetres = 0.006 m)",
+                                 {"circuit.bellow.heat": {"model": "correlation", "wall_thickness_m": 6}}),
+    "negative air speed": Case("twist", "circuit.tank.heat.air_speed_m_per_s", "[0, 100] m/s",
+                               {"circuit.tank.heat": {"model": "correlation", "air_speed_m_per_s": -5}}),
+    "emissivity above 1": Case("ramp", "circuit.tank.heat.emissivity", "[0, 1]",
+                               {"circuit.tank.heat": {"model": "correlation", "emissivity": 1.5}}),
+    "a tank narrower than its port": Case("ramp", "circuit.tank.heat.diameter_m", "wider than its port",
+                                          {"circuit.tank.heat": {"model": "correlation", "diameter_m": 0.01}}),
+    "an explicit component's heat": Case("explicit", "circuit.components.tank_FL.heat.wall_conductivity_W_per_mK",
+                                         "(0.05, 500] W/(m K)", {"circuit.components.tank_FL.heat": {
+                                             "model": "correlation", "wall_conductivity_W_per_mK": 0}}),
+    "own k (--set)": Case("twist", "circuit.bellow.heat.k_W_per_K", ">= 0 W/K", argv=["--set",
+                                                                                   "circuit.bellow.heat.k_W_per_K=-2"]),
+}
+
 CORPUS = {f"{group}: {name}": case for group, cases in (
     ("numbers", NUMBERS), ("duplicates", DUPLICATES), ("files", FILES), ("keys", KEYS), ("types", TYPES),
     ("cross-field", CROSS), ("faults", FAULTS), ("stability", STABILITY), ("units", UNITS),
-    ("semantics", SEMANTICS)) for name, case in cases.items()}
+    ("semantics", SEMANTICS), ("heat", HEAT)) for name, case in cases.items()}
 
 
 def test_the_corpus_is_large_enough():
@@ -573,6 +609,21 @@ def test_a_zero_valve_lag_is_accepted(tmp_path):
     data["circuit"]["levelling_valve"].update(lag_s=0, delay_s=0.0, hysteresis_m=0)
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(data))
     assert load_scenario(tmp_path / "s.yaml").circuit.levelling_valve.lag_s == 0.0
+
+
+def test_a_chambers_own_heat_exchange_is_accepted_and_reaches_the_circuit(tmp_path):
+    """heat: {model: correlation} on the bellows, an isothermal tank by its own k = .inf (YAML's
+    infinity, admitted where the range says so); the preset's other keys stay."""
+    data = BASES["twist"]()
+    data["circuit"].update(bellow={"heat": {"model": "correlation", "air_speed_m_per_s": 0}},
+                           tank={"heat": {"k_W_per_K": INF}})
+    path = tmp_path / "s.yaml"
+    path.write_text(yaml.safe_dump(data))
+    circuit = load_scenario(path).circuit
+    assert circuit.bellow.heat.model == "correlation" and circuit.bellow.heat.air_speed_m_per_s == 0.0
+    assert circuit.tank.heat.k_W_per_K == INF and circuit.tank.V_m3 == 0.027
+    components = circuit.components()
+    assert components["FL"].heat == circuit.bellow.heat and components["tank_RR"].heat == circuit.tank.heat
 
 
 def test_explicit_bellows_in_any_order_are_put_in_the_car_order(tmp_path):
