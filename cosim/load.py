@@ -192,6 +192,7 @@ def _car_scenario(kind, data: Mapping, path: Path, common: Mapping) -> Scenario:
         raise ScenarioError(path, ["payload"], refused)
     payload = parse_payload(data.get("payload"), path, shortest)
     experiment = kind.with_payload(experiment, payload, path)
+    circuit = kind.with_circuit(experiment, circuit, path)
     if payload is not None:       # the car starts carrying its payload at arrival: the bellows' pressures follow
         car = _check_car_builds(vehicle, data.get("vehicle"), path, payload)
     # an FMU's initial air is its own, known once it runs

@@ -47,7 +47,7 @@ model choice: brake and door equipment stop taking air as their supply pressure 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Optional, Tuple
 
 import numpy as np
 
@@ -82,6 +82,10 @@ class Compressor:
     T_delivery_K: Optional[float] = field(default=None, metadata=ranged(AIR_TEMPERATURE))
 
 
+#: a demand's fade-out width: the pressure above the atmosphere's over which its draw fades out
+DP_OFF = plausible(1e2, 5e5, "Pa", "the pressure over which the draw fades out near the atmosphere's")
+
+
 @dataclass(frozen=True)
 class AirDemand:
     """Other consumers drawing air from ``node`` (brakes, doors): a steady normal volume flow
@@ -92,8 +96,33 @@ class AirDemand:
     # brakes and doors of a car draw tens to a few hundred Nl/min on average; up to 30 Nm^3/min
     normal_flow_m3_per_s: float = field(default=1.0e-3, metadata=plausible(
         0.0, 0.5, "m^3/s", "a normal volume flow, up to 30 Nm^3/min", low_inclusive=False))
-    dp_off_Pa: float = field(default=2.0e4, metadata=plausible(1e2, 5e5, "Pa", "the pressure over which the draw fades "
-                                                                                "out near the atmosphere's"))
+    dp_off_Pa: float = field(default=2.0e4, metadata=DP_OFF)
+
+
+@dataclass(frozen=True)
+class ScheduledDemand:
+    """A demand from ``node`` that draws only within its ``windows``, each (t_on_s, t_off_s,
+    normal_flow_m3_per_s): the normal flow over [t_on, t_off), the sum where windows overlap, 0
+    outside every window; fading out within ``dp_off_Pa`` of the atmosphere's pressure as an
+    :class:`AirDemand` (module docstring). Not a component: :meth:`at` is the steady demand it is
+    from an instant on, which a circuit holds; :meth:`switch_times`, when that changes."""
+
+    windows: Tuple[Tuple[float, float, float], ...]
+    node: str = "supply"
+    dp_off_Pa: float = 2.0e4
+
+    def at(self, t_s: float) -> AirDemand:
+        """The steady demand it is from ``t_s`` until its next switch time."""
+        flow = sum((q for t_on, t_off, q in self.windows if t_on <= t_s < t_off), 0.0)
+        return AirDemand(self.node, flow, self.dp_off_Pa)
+
+    def switch_times(self) -> Tuple[float, ...]:
+        """The instants its rate may change (every window's edges), in order."""
+        return tuple(sorted({t for t_on, t_off, _ in self.windows for t in (t_on, t_off)}))
+
+    def normal_volume_m3(self) -> float:
+        """The normal volume its windows draw in all, while the node holds air [m^3]."""
+        return sum((q * (t_off - t_on) for t_on, t_off, q in self.windows), 0.0)
 
 
 def free_air_density_kg_per_m3(p_atm_Pa, T_atm_K, R_J_per_kgK):

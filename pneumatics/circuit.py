@@ -55,6 +55,7 @@ from __future__ import annotations
 
 from typing import Mapping, Sequence
 
+from .air_supply import AirDemand
 from .assembly import assemble
 from .assembly.components import ATMOSPHERE, COMPONENT_TYPES
 from .assembly.layout import StateLayout
@@ -95,3 +96,15 @@ class Circuit(CircuitRuntime):
         indices ``active`` having happened."""
         return Circuit(self._given_components, gas=self.gas, atmosphere=self.atmosphere, k_W_per_K=self.k_W_per_K,
                        faults=self.faults, active_faults=active)
+
+    def with_demands(self, demands: Mapping[str, AirDemand]) -> "Circuit":
+        """The same circuit (same components, faults, active faults and state layout) with each air
+        demand named in ``demands`` drawing as the demand given there (from the same node): a
+        scheduled demand's rate switched (:class:`~pneumatics.air_supply.ScheduledDemand`)."""
+        for name, demand in demands.items():
+            given = self._given_components.get(name)
+            if not isinstance(given, AirDemand) or not isinstance(demand, AirDemand) or demand.node != given.node:
+                raise CircuitError([name], "only an air demand of the circuit can be switched, to another rate from "
+                                           "the same node")
+        return Circuit({**self._given_components, **demands}, gas=self.gas, atmosphere=self.atmosphere,
+                       k_W_per_K=self.k_W_per_K, faults=self.faults, active_faults=self.active_faults)

@@ -53,7 +53,8 @@ def build_cosimulation(scenario: Scenario, k_values: Sequence[float], make_car: 
     h_pneumatic = stable_step_s(every, every.initial_state(p0, n_cases=len(every_k)), settings.pneumatic_step_s)
     watch = StateWatch(scenario.state_limits, len(k_values), cars[0].bellow_height_m)
     return CoSimulation(cars, circuit, x0, settings.macro_step_s, h_pneumatic, settings.coupling,
-                        case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch, extra_outputs=extra_outputs)
+                        case_labels=[f"k = {k_label(k)} W/K" for k in k_values], watch=watch, extra_outputs=extra_outputs,
+                        scheduled_demands=dict(scenario.circuit.scheduled_demands))
 
 
 def _run_chunk(args) -> Tuple[Dict[str, np.ndarray], Optional[str], List[float]]:

@@ -38,12 +38,13 @@ pneumatic cost per macro-step is paid once for all of them.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
 from cosim.interrupts import stop_requested
 from cosim.limits.watch import StateWatch
+from pneumatics.air_supply import ScheduledDemand
 from pneumatics.circuit import Circuit, CircuitDiverged
 from pneumatics.integrate import advance, hermite_motion, stable_step_s
 from vehicle.errors import Derailed
@@ -220,6 +221,10 @@ class CoSimulation:
     it (:meth:`Circuit.with_active_faults`), within the macro-step, so the instant is exact
     whatever the steps; the force law of that step is the one of its start, anchored again to
     the faulted air at the next step (a one-step O(H) force error, O(H^2) in what it moves).
+    The scheduled demands (``scheduled_demands``: name -> :class:`~pneumatics.air_supply.ScheduledDemand`,
+    each an air demand of the circuit that draws only within its windows) switch the circuit
+    the same way at their windows' edges (:meth:`Circuit.with_demands`): one list of switches,
+    faults and demand rates merged by time, every circuit of it with the same state layout.
 
     It samples :data:`OUTPUTS` and then ``extra_outputs`` (a kind's own, each ``read`` a
     module-level function: the outputs travel to the worker processes).
@@ -227,7 +232,8 @@ class CoSimulation:
 
     def __init__(self, cars: Sequence, circuit: Circuit, x0: np.ndarray, macro_step_s: float,
                  pneumatic_step_s: float, coupling: str = "linearised", case_labels: Optional[Sequence[str]] = None,
-                 watch: Optional[StateWatch] = None, extra_outputs: Sequence[Output] = ()):
+                 watch: Optional[StateWatch] = None, extra_outputs: Sequence[Output] = (),
+                 scheduled_demands: Optional[Mapping[str, ScheduledDemand]] = None):
         if coupling not in COUPLINGS:
             raise ValueError(f"coupling must be one of {COUPLINGS}, got {coupling!r}")
         self.cars, self.circuit, self.x = list(cars), circuit, x0.copy()
@@ -253,31 +259,49 @@ class CoSimulation:
         #: (x, z, circuit, evaluation) of the last sample (the next macro-step's force laws start
         #: from the same state: :meth:`_evaluation_now`), None after a step
         self._sampled = None
-        #: [(time, circuit from then on)] of the faults still to happen, by time
-        times = sorted({f.t_s for f in circuit.faults})
-        self._faults = [(t, circuit.with_active_faults([i for i, f in enumerate(circuit.faults) if f.t_s <= t]))
-                        for t in times]
-        self._switch_faults(0.0)
+        #: [(time, circuit from then on)] of the switches still to happen (faults, scheduled
+        #: demands' rates), by time
+        self._switches = self._circuit_switches(circuit, scheduled_demands or {})
+        self._switch(0.0)
 
-    #: faults within this time of a macro-step boundary happen at it [s] (round-off of t_n)
+    #: switches within this time of a macro-step boundary happen at it [s] (round-off of t_n)
     FAULT_TIME_TOL_S = 1e-9
 
-    def _switch_faults(self, t: float) -> None:
-        """The circuit with every fault up to ``t`` active."""
-        while self._faults and self._faults[0][0] <= t + self.FAULT_TIME_TOL_S:
-            self.circuit = self._faults.pop(0)[1]
+    @staticmethod
+    def _circuit_switches(circuit: Circuit, scheduled: Mapping[str, ScheduledDemand]) -> List[Tuple[float, Circuit]]:
+        """At every fault's time and every scheduled demand's switch time, the circuit from then
+        on: the faults up to then active, each scheduled demand at its rate from then on. Equal
+        circuits are built once (a service's stops repeat a few rates)."""
+        faults = circuit.faults
+        times = sorted({f.t_s for f in faults} | {t for s in scheduled.values() for t in s.switch_times()})
+        built: Dict[tuple, Circuit] = {}
+        switches = []
+        for t in times:
+            active = tuple(i for i, f in enumerate(faults) if f.t_s <= t)
+            demands = tuple((name, s.at(t)) for name, s in scheduled.items())
+            if (active, demands) not in built:
+                base = circuit.with_demands(dict(demands)) if demands else circuit
+                built[active, demands] = base.with_active_faults(active)
+            switches.append((t, built[active, demands]))
+        return switches
+
+    def _switch(self, t: float) -> None:
+        """The circuit of every switch up to ``t``."""
+        while self._switches and self._switches[0][0] <= t + self.FAULT_TIME_TOL_S:
+            self.circuit = self._switches.pop(0)[1]
 
     def _advance_air(self, t1: float, motion, rate) -> np.ndarray:
         """The circuit's state at ``t1`` from (t_n, x_n) along ``motion``, switching the circuit
-        at the faults that happen within the step (``rate``: d(state)/dt at t_n, see :meth:`step`)."""
+        at the faults and demand rates that change within the step (``rate``: d(state)/dt at
+        t_n, see :meth:`step`)."""
         x, t = self.x, self.t
-        while self._faults and self._faults[0][0] < t1 - self.FAULT_TIME_TOL_S:
-            t_fault = self._faults[0][0]
-            x = advance(self.circuit, x, t, t_fault, motion, self.h_pneumatic, rate0=rate)
-            t, rate = t_fault, None
-            self._switch_faults(t)
+        while self._switches and self._switches[0][0] < t1 - self.FAULT_TIME_TOL_S:
+            t_switch = self._switches[0][0]
+            x = advance(self.circuit, x, t, t_switch, motion, self.h_pneumatic, rate0=rate)
+            t, rate = t_switch, None
+            self._switch(t)
         x = advance(self.circuit, x, t, t1, motion, self.h_pneumatic, rate0=rate)
-        self._switch_faults(t1)
+        self._switch(t1)
         return x
 
     def _crushing(self):

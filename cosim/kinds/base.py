@@ -193,6 +193,13 @@ class CarKind(Kind):
         the load on board at the start, and checks the load at every stop."""
         return experiment
 
+    def with_circuit(self, experiment: Any, circuit: Any, path: Path) -> Any:
+        """The scenario's circuit once the experiment is final (after :meth:`with_payload`), with
+        what the kind adds to it, checked (default: the circuit unchanged). A service adds its air
+        per stop: a demand on the main reservoir that draws at every stop
+        (:class:`~pneumatics.air_supply.ScheduledDemand`)."""
+        return circuit
+
     @abstractmethod
     def make_car(self, scenario: "Scenario"):
         """The car of a run, with the :class:`vehicle.car.MetroCar` interface (a bound method of

@@ -13,6 +13,11 @@ normal litres, with the compressor's duty and energy where the circuit has one. 
 the doors are open and at door close, the time it needs to re-level, the valve openings and the
 air injected during the stop.
 
+``air_per_stop`` (:class:`AirPerStop`): the brakes and doors take an amount of air from the main
+reservoir at every stop, a demand on the circuit's supply that draws only while the car stands
+(:class:`~pneumatics.air_supply.ScheduledDemand`, switched by the co-simulation); the stops table
+and the summary then give what it drew.
+
 The car runs on kinematic guidance (the wheelsets led along the track at the speed profile's
 s(t)): the longitudinal inertia of braking and accelerating reaches the carbody through the
 guidance at the axle centres, not as creep forces at the rails (docs/service.md). Gradients are
@@ -43,16 +48,21 @@ from cosim.runs.car import air_columns, fault_columns, of_setting, per_case
 from cosim.runs.route import LineCurve, LineStation, Plan, RoutePayload, plan, run_time_s
 from cosim.runs.track_run import plane_roll_rad
 from cosim.runs.track_spec import CANT, MAX_TRACK_LENGTH_M, RADIUS, SPEED, TRANSITION
+from cosim.scenario.imported import is_imported
 from cosim.scenario.model import Scenario
 from cosim.scenario.payload import PayloadSchedule, PayloadSettings
 from cosim.scenario.schema import build, check_keys, check_valve_settings, describe, is_key, k_label, set_at_load
-from pneumatics.air_supply import normal_density_kg_per_m3
+from pneumatics.air_supply import DP_OFF, ScheduledDemand, normal_density_kg_per_m3
+from pneumatics.boundary import Supply
+from pneumatics.chamber import Tank
 from pneumatics.gas import AIR
 from pneumorail.quantities import plausible, ranged
 from vehicle.params import VehicleParams
 from vehicle.track import TRANSITION_SHAPES
 
 SIDES = ("left", "right")
+#: the air per stop's demand in the circuit: its link's name, its share of ``air_demand_kg``
+STOP_DEMAND = "air_per_stop"
 
 
 @dataclass(frozen=True)
@@ -90,6 +100,21 @@ class CurveSpec:
 
 
 @dataclass(frozen=True)
+class AirPerStop:
+    """``service.air_per_stop``: the air the brakes and doors take from the main reservoir
+    (``circuit.supply``, which then needs a volume ``V_m3``) at every stop of the route, the first
+    included: ``normal_volume_m3`` of free air (DIN 1343 normal cubic metres, 0 degC and
+    1.01325 bar; 40 Nl = 0.04), drawn at a constant rate from the car's arrival to its departure.
+    Default **assumed** 40 Nl: one brake application and one cycle of the platform side's three
+    doors of a metro car (docs/service.md). Like ``circuit.air_demand`` the draw fades out within
+    ``dp_off_Pa`` of the atmosphere's pressure."""
+
+    normal_volume_m3: float = field(default=0.04, metadata=plausible(
+        0.0, 1.0, "m^3", "a car's air at a stop, up to 1 Nm^3 (1000 Nl)", low_inclusive=False))
+    dp_off_Pa: float = field(default=2.0e4, metadata=DP_OFF)
+
+
+@dataclass(frozen=True)
 class Service(Doors):
     """A route run by one car (module docstring). ``line_speed_m_per_s``: the speed it cruises
     at between stations (**assumed** 70 km/h, a metro's); ``acceleration_m_per_s2`` and
@@ -99,7 +124,8 @@ class Service(Doors):
     to the departure (**assumed** 2 s and 3 s); ``spread_s``: how long the boarders take to
     spread from the platform side over the floor after departure (**assumed** 15 s). The doors and
     the floor's tolerance as a station stop's (:class:`~cosim.kinds.station_stop.Doors`).
-    ``valve_settings``: as the twist's."""
+    ``valve_settings``: as the twist's. ``air_per_stop``: the air the brakes and doors take from
+    the main reservoir at every stop (:class:`AirPerStop`; null: none)."""
 
     stations: Tuple[StationSpec, ...] = ()
     curves: Tuple[CurveSpec, ...] = ()
@@ -113,6 +139,7 @@ class Service(Doors):
     door_close_s: float = field(default=3.0, metadata=plausible(0.0, 60.0, "s"))
     spread_s: float = field(default=15.0, metadata=plausible(0.0, 600.0, "s", low_inclusive=False))
     valve_settings: Optional[Tuple[bool, ...]] = None
+    air_per_stop: Optional[AirPerStop] = None
     # set at load, not keys: the car's half length (centre to front wheelset) and the payload's settings
     car_half_length_m: float = field(default=6.0, metadata=set_at_load(plausible(0.5, 30.0, "m",
                                                                                   "a car's centre to its front wheelset")))
@@ -234,6 +261,43 @@ def with_payload(service: Service, payload, path: Path) -> Service:
     return service
 
 
+def stop_demand(service: Service) -> Optional[ScheduledDemand]:
+    """The air per stop as a demand on the main reservoir (None without ``air_per_stop``): at
+    every stop its normal volume over [arrival, departure), at a constant rate."""
+    air = service.air_per_stop
+    if air is None:
+        return None
+    windows = tuple((st.arrive_s, st.depart_s, air.normal_volume_m3 / (st.depart_s - st.arrive_s))
+                    for st in service.plan.stops)
+    return ScheduledDemand(windows, "supply", air.dp_off_Pa)
+
+
+def with_circuit(service: Service, circuit, path: Path):
+    """With ``air_per_stop``: the circuit with its demand (:data:`STOP_DEMAND`) on the main
+    reservoir, which must hold air (a supply with a volume, or a tank named ``supply`` in an
+    explicit circuit); refused with an FMU circuit, whose air is inside the FMU."""
+    demand = stop_demand(service)
+    if demand is None:
+        return circuit
+    where = ["service", "air_per_stop"]
+    if is_imported(circuit):
+        raise ScenarioError(path, where, "an FMU circuit's air supply is inside the FMU (circuit.fmu): leave "
+                                         "air_per_stop out")
+    if circuit.explicit is not None:
+        components = dict(circuit.explicit)
+        if STOP_DEMAND in components:
+            raise ScenarioError(path, where, f"the circuit already has a component named {STOP_DEMAND!r}, the name "
+                                             f"of the air per stop's demand: rename it")
+        supply = components.get("supply")
+        holds = isinstance(supply, Tank) or (isinstance(supply, Supply) and not supply.is_fixed)
+    else:
+        holds = not circuit.supply.is_fixed
+    if not holds:
+        raise ScenarioError(path, where, "draws from the main reservoir, which must hold air: give circuit.supply a "
+                                         "volume V_m3 (the default supply is a source at fixed pressure)")
+    return dataclasses.replace(circuit, scheduled_demands=(*circuit.scheduled_demands, (STOP_DEMAND, demand)))
+
+
 def duration_s(service: Service) -> float:
     """The trip, rounded up to a whole second (the car stands after the last dwell): a whole
     number of every usual macro-step and output interval."""
@@ -256,13 +320,21 @@ def make_car(scenario: Scenario):
                     track=route.track, speed_profile=route.speed, guidance="kinematic", payload=payload)
 
 
+def air_per_stop_kg(sample) -> np.ndarray:
+    """The air the air per stop's demand drew (cumulative, kg, per case)."""
+    circuit = sample.sim.circuit
+    return circuit.demand_air_kg(sample.sim.x)[circuit.demand_names.index(STOP_DEMAND)]
+
+
 def outputs(service: Service) -> Tuple[Output, ...]:
     """What a service samples besides every car run's outputs: the floor at the doors on both
-    sides, the payload on board."""
+    sides, the payload on board; with ``air_per_stop``, the air it drew."""
+    air = (Output("air_per_stop_kg", (), "kg", "air the brakes and doors drew at the stops (service.air_per_stop; "
+                  "cumulative)", "air_per_stop_kg", air_per_stop_kg, air_supply=True),) if service.air_per_stop else ()
     return tuple(Output(f"floor_{side}_z_m", ("floor_point",), "m", f"floor height above rail top at the {side}-hand "
                         "door thresholds (front, centre, rear door)", f"floor_{side}_z_{{}}_m",
                         FloorHeights(service.door_points(side))) for side in SIDES) + (
-        Output("payload_kg", (), "kg", "payload on board", "payload_kg", payload_kg),)
+        Output("payload_kg", (), "kg", "payload on board", "payload_kg", payload_kg),) + air
 
 
 def _at(t: np.ndarray, when: float) -> int:
@@ -283,6 +355,7 @@ def stop_rows(case: xr.Dataset, service: Service) -> List[Dict[str, object]]:
               if "valve" in case.dims else [np.zeros((len(t), 0))])
     open_s = np.concatenate(valves, axis=1)
     injected = case["air_from_supply_kg"].values
+    drawn = case["air_per_stop_kg"].values if "air_per_stop_kg" in case else None
     recorded = np.flatnonzero(np.isfinite(injected))
     t_last = t[recorded[-1]] if recorded.size else -math.inf   # a case that stopped early is NaN after
     rows = []
@@ -302,6 +375,12 @@ def stop_rows(case: xr.Dataset, service: Service) -> List[Dict[str, object]]:
                      "floor_dz_max_m": float(doors.max()), "floor_dz_close_m": _worst(dz[i_close]),
                      "relevel_s": relevel, "valve_openings": openings(open_s[i_arr:i_dep + 1]),
                      "air_injected_kg": float(injected[i_dep] - injected[i_arr])})
+        if drawn is not None:
+            # the samples around the stop, so that the window [arrival, departure) lies within them
+            # whatever the output interval; the demand draws nothing between stops
+            i0 = int(np.searchsorted(t, stop.arrive_s + 1e-9, side="right")) - 1
+            i1 = int(np.searchsorted(t, stop.depart_s - 1e-9, side="left"))
+            rows[-1]["air_per_stop_kg"] = float(drawn[i1] - drawn[i0])
     return rows
 
 
@@ -320,6 +399,9 @@ def case_row(stops: List[Dict[str, object]], case: xr.Dataset, service: Service,
     rho_n = normal_density_kg_per_m3(gas.R_J_per_kgK)      # a normal litre: DIN 1343, 0 degC and 1.01325 bar
     row["air_injected_NL"] = row["air_injected_kg"] / rho_n * 1e3
     row["air_exhausted_NL"] = row["air_exhausted_kg"] / rho_n * 1e3
+    if "air_per_stop_kg" in case:                          # its share of air_demand_kg
+        row["air_per_stop_kg"] = float(case["air_per_stop_kg"].values[-1])
+        row["air_per_stop_NL"] = row["air_per_stop_kg"] / rho_n * 1e3
     return row
 
 
@@ -435,6 +517,9 @@ class ServiceKind(CarKind):
 
     def with_payload(self, experiment, payload, path):
         return with_payload(experiment, payload, path)
+
+    def with_circuit(self, experiment, circuit, path):
+        return with_circuit(experiment, circuit, path)
 
 
 KIND = ServiceKind()

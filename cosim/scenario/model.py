@@ -12,7 +12,7 @@ from typing import Any, Dict, Optional, Tuple
 
 from cosim.scenario.checks import Check
 from cosim.scenario.payload import PayloadSchedule
-from pneumatics.air_supply import AirDemand, Compressor
+from pneumatics.air_supply import AirDemand, Compressor, ScheduledDemand
 from pneumatics.boundary import Supply
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import Circuit
@@ -134,16 +134,22 @@ class CarCircuit:
     #: (``circuit.compressor``, ``circuit.air_demand``; :mod:`pneumatics.air_supply`)
     compressor: Optional[Compressor] = None
     air_demand: Optional[AirDemand] = None
+    #: demands that draw only within their windows (a service's air per stop), name -> demand: each
+    #: an air demand of the circuit at its rate at t = 0, which the co-simulation switches at the
+    #: windows' edges (:class:`cosim.engine.master.CoSimulation`)
+    scheduled_demands: Tuple[Tuple[str, ScheduledDemand], ...] = ()
 
     def components(self) -> Dict[str, object]:
+        scheduled = {name: s.at(0.0) for name, s in self.scheduled_demands}
         if self.explicit is not None:
-            return dict(self.explicit)
+            return {**dict(self.explicit), **scheduled}
         components = car_circuit(self.bellow, self.tank, self.pipe,
                                  levelling=self.levelling_valve if self.valves else None,
                                  differential=self.differential_valve if self.valves else None,
                                  supply=self.supply, points=4 if self.layout == "four_point" else 2,
                                  cross_pipe=self.cross_pipe)
         extra = {name: c for name, c in (("compressor", self.compressor), ("air_demand", self.air_demand)) if c is not None}
+        extra.update(scheduled)
         if extra and "supply" not in components:     # valves off: the reservoir is still there, filled and drawn
             components["supply"] = self.supply
         return {**components, **extra}

@@ -274,10 +274,15 @@ class AirDemandLinks(LinkType):
     the atmosphere's pressure (:mod:`pneumatics.air_supply`)."""
 
     key = "air_demand"
-    positive = ("normal_flow_m3_per_s", "dp_off_Pa")
+    positive = ("dp_off_Pa",)
 
     def takes(self, comp) -> bool:
         return isinstance(comp, AirDemand)
+
+    def check_more(self, name: str, demand: AirDemand) -> None:
+        # 0: a demand switched off (a scheduled demand between its windows) draws nothing
+        if not demand.normal_flow_m3_per_s >= 0:
+            raise CircuitError([name, "normal_flow_m3_per_s"], f"must be >= 0, got {demand.normal_flow_m3_per_s}")
 
     def ends(self, name: str, demand: AirDemand) -> LinkEnds:
         return LinkEnds(name, name, "node", demand.node, "exhaust", name)

@@ -1,5 +1,6 @@
 """The compressor under its governor and the air demands (pneumatics.air_supply): the duty cycle
-against its analytic on/off cycle, the mass balance, the governor's hysteresis, bad descriptions."""
+against its analytic on/off cycle, the mass balance, the governor's hysteresis, bad descriptions;
+a demand on a schedule (its rate at each instant, the circuit with a demand switched)."""
 from __future__ import annotations
 
 import math
@@ -7,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from pneumatics.air_supply import AirDemand, Compressor, governor, normal_density_kg_per_m3
+from pneumatics.air_supply import AirDemand, Compressor, ScheduledDemand, governor, normal_density_kg_per_m3
 from pneumatics.boundary import Atmosphere, Supply
 from pneumatics.circuit import Circuit, CircuitError
 from pneumatics.gas import AIR
@@ -150,6 +151,31 @@ def test_a_bad_air_supply_is_refused_naming_the_field(components, field, words):
     with pytest.raises(CircuitError, match=words) as err:
         Circuit(components, atmosphere=ATM)
     assert err.value.path[-1] == field
+
+
+def test_a_scheduled_demand_draws_within_its_windows_only():
+    demand = ScheduledDemand(((1.0, 3.0, 2e-3), (2.0, 4.0, 1e-3), (6.0, 7.0, 5e-4)), dp_off_Pa=1e4)
+    # [t_on, t_off): on at its start, off at its end; overlapping windows add up
+    rates = [demand.at(t).normal_flow_m3_per_s for t in (0.0, 1.0, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 7.0)]
+    assert rates == [0.0, 2e-3, 3e-3, 3e-3, 1e-3, 0.0, 0.0, 5e-4, 0.0]
+    assert demand.at(2.0) == AirDemand("supply", 3e-3, 1e4)
+    assert demand.switch_times() == (1.0, 2.0, 3.0, 4.0, 6.0, 7.0)
+    assert demand.normal_volume_m3() == pytest.approx(2e-3 * 2 + 1e-3 * 2 + 5e-4, rel=1e-15)
+
+
+def test_a_demand_is_switched_to_another_rate_on_the_same_circuit():
+    components = {"supply": Supply(p_Pa=9e5, V_m3=V_RESERVOIR_M3), "stops": AirDemand("supply", 0.0)}
+    off = Circuit(components, atmosphere=ATM, k_W_per_K=math.inf)
+    on = off.with_demands({"stops": AirDemand("supply", DEMAND_NM3_PER_S)})
+    assert on.layout == off.layout and on.link_names == off.link_names
+    x0 = off.initial_state()
+    # switched off it draws nothing, bit for bit; on, its full rate well above the atmosphere
+    assert off.demand_air_kg(advance(off, x0, 0.0, 1.0, _no_motion, 0.01))[0] == 0.0
+    drawn = on.demand_air_kg(advance(on, x0, 0.0, 1.0, _no_motion, 0.01))[0]
+    assert drawn == pytest.approx(_rates()[1] * 1.0, rel=1e-13)        # a constant rate: RK4 exact to round-off
+    for name, demand in (("supply", AirDemand("supply", 1e-3)), ("stops", Supply()), ("stops", AirDemand("tank"))):
+        with pytest.raises(CircuitError, match="only an air demand"):
+            off.with_demands({name: demand})
 
 
 def test_the_adaptive_integrator_refuses_a_governed_circuit():

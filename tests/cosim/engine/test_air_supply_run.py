@@ -1,14 +1,23 @@
 """A car run with a compressor filling the main reservoir and a demand drawing from it: the
-scenario keys checked at load, the sampled series, the summary's duty cycle and the mass balance."""
+scenario keys checked at load, the sampled series, the summary's duty cycle and the mass balance;
+the co-simulation switching a demand on a schedule at its windows' edges, merged with a fault's
+time."""
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
+from cosim.engine.master import CoSimulation
 from cosim.errors import ScenarioError
 from cosim.load import load_scenario
 from cosim.runner import run
+from pneumatics.air_supply import AirDemand, ScheduledDemand, normal_density_kg_per_m3
+from pneumatics.boundary import Supply
+from pneumatics.circuit import Circuit
+from pneumatics.faults import Fault
+from pneumatics.gas import AIR
 
 from helpers import SCENARIOS
 
@@ -62,3 +71,50 @@ def test_a_curve_run_reports_its_air_supply_too():
     assert row["compressor_air_kg"] > 0.0 and 0.0 < row["compressor_duty"] < 1.0
     assert 0.0 < row["compression_isothermal_J"] < row["compression_adiabatic_J"]
     assert abs(row["mass_balance_error_kg"]) < 1e-10
+
+
+class _StillCar:
+    """A car without bellows that stands still: the co-simulation's air alone."""
+
+    def bellow_crushing(self):
+        return np.zeros(0), np.zeros(0)
+
+    def set_bellow_forces(self, *laws):
+        pass
+
+    def advance(self, t_s):
+        pass
+
+
+def test_the_master_switches_a_scheduled_demand_at_its_windows_edges_within_the_macro_steps():
+    # windows whose edges fall inside 10 ms macro-steps, a steady demand beside it and a leak that
+    # opens between two windows: one list of switches, by time
+    windows = ((0.013, 0.517, 2e-3), (0.7043, 1.3, 1e-3))
+    scheduled = ScheduledDemand(windows)
+    components = {"supply": Supply(p_Pa=9e5, V_m3=0.1), "stops": scheduled.at(0.0),
+                  "steady": AirDemand("supply", 1e-3)}
+    circuit = Circuit(components, k_W_per_K=np.array([math.inf]), faults=(Fault("leak", "supply", 0.6, area_m2=1e-6),))
+    x0 = circuit.initial_state()
+    sim = CoSimulation([_StillCar()], circuit, x0, 0.01, 0.005, scheduled_demands={"stops": scheduled})
+    assert [t for t, _ in sim._switches] == [0.013, 0.517, 0.6, 0.7043, 1.3]
+    t, stops, steady = [0.0], [0.0], [0.0]
+    for _ in range(150):
+        sim.step()
+        drawn = sim.circuit.demand_air_kg(sim.x)[:, 0]
+        t.append(sim.t)
+        stops.append(float(drawn[0]))
+        steady.append(float(drawn[1]))
+    t, stops = np.array(t), np.array(stops)
+    rho_n = normal_density_kg_per_m3(AIR.R_J_per_kgK)
+    # the reservoir stays near 9 bar (the draw at its full rate): each window draws rho_N Q (t_off - t_on),
+    # a constant rate that RK4 integrates exactly; 1e-12: round-off over 300 sub-steps
+    for (t_on, t_off, q), i_on, i_off in zip(windows, (0, 60), (60, 140)):
+        assert stops[i_off] - stops[i_on] == pytest.approx(rho_n * q * (t_off - t_on), rel=1e-12)
+    # nothing in a macro-step outside the windows, bit for bit; something in every one that overlaps one
+    within = np.array([any(a < t_off and t_on < b for t_on, t_off, _ in windows) for a, b in zip(t, t[1:])])
+    assert np.all(np.diff(stops)[~within] == 0.0) and np.all(np.diff(stops)[within] > 0.0)
+    assert (~within).sum() == 1 + 18 + 20            # the steps within 0-0.013, 0.517-0.7043, 1.3-1.5 s
+    assert steady[-1] == pytest.approx(rho_n * 1e-3 * 1.5, rel=1e-12)    # the steady demand unaffected
+    assert sim.circuit.active_faults == frozenset({0})                       # the leak opened too
+    balance = sim.circuit.total_mass_kg(sim.x) - circuit.total_mass_kg(x0) - sim.circuit.net_inflow_kg(sim.x)
+    assert abs(balance[0]) < 1e-13                                           # round-off on 0.9 kg of air

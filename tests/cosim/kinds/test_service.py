@@ -1,14 +1,18 @@
 """A line in service (cosim/kinds/service.py, cosim/runs/route.py): the route checked at load
 with the key that is wrong, the plan against hand arithmetic (stops where the stations are,
-run times of the trapezoid, the round trip mirrored, the passengers' mass conserved), and a
-short trip's stops and air accounts."""
+run times of the trapezoid, the round trip mirrored, the passengers' mass conserved), a
+short trip's stops and air accounts, and the air the brakes and doors take at every stop."""
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from cosim.errors import ScenarioError
+from cosim.kinds.service import STOP_DEMAND, outputs
 from cosim.load import load_scenario
 from cosim.runs.route import RoutePayload, run_phases, run_time_s
+from pneumatics.air_supply import normal_density_kg_per_m3
+from pneumatics.gas import AIR
 
 from helpers import SCENARIOS
 
@@ -95,6 +99,17 @@ def test_the_passengers_mass_is_conserved_along_the_trip():
     (["service.line_speed_m_per_s=700"], "service.line_speed_m_per_s", "360 km/h"),
     (["service.stations=[{name: A, at_m: 0}]"], "service.stations", "at least two"),
     (["service.stations[0].colour=red"], "service.stations[0].colour", "unknown key"),
+    (["service.air_per_stop={normal_volume_m3: 40}"], "service.air_per_stop.normal_volume_m3", "litres?"),
+    (["service.air_per_stop={normal_volume_m3: 0}"], "service.air_per_stop.normal_volume_m3", "(0, 1] m^3"),
+    (["service.air_per_stop={normal_volume_m3: -0.04}"], "service.air_per_stop.normal_volume_m3", "(0, 1] m^3"),
+    (["service.air_per_stop={normal_volume_m3: .nan}"], "service.air_per_stop.normal_volume_m3", "finite"),
+    (["service.air_per_stop={normal_volume_m3: lots}"], "service.air_per_stop.normal_volume_m3", "expected a number"),
+    (["service.air_per_stop={dp_off_Pa: 0}"], "service.air_per_stop.dp_off_Pa", "[100, 500000] Pa"),
+    (["service.air_per_stop={normal_litres: 40}"], "service.air_per_stop.normal_litres", "unknown key"),
+    (["service.air_per_stop=40"], "service.air_per_stop", "expected a mapping"),
+    (["service.air_per_stop={}", "circuit.supply={p_Pa: 9.0e+5}", "circuit.compressor=null", "circuit.air_demand=null"],
+     "service.air_per_stop", "give circuit.supply a volume"),
+    (["service.air_per_stop=null"], None, None),                            # none, as without the key
 ])
 def test_a_wrong_route_is_refused_naming_its_key(sets, key, words):
     if key is None:
@@ -133,3 +148,67 @@ def test_a_short_trip_reports_its_stops_and_closes_its_air_balance(tmp_path):
     assert row["air_injected_NL"] == pytest.approx(row["air_injected_kg"] / 1.2923 * 1e3, rel=1e-3)
     payload = outcome.series["service"]["payload_kg"].values.ravel()
     assert payload[0] == 0.0 and payload[-1] == pytest.approx(0.0, abs=1e-9) and max(payload) == pytest.approx(700.0)
+
+
+ONE_WAY = ["service.curves=[]", "service.round_trip=false", "payload.initial={passengers: 0}"]
+
+
+def test_without_air_per_stop_the_circuit_and_the_outputs_are_as_before():
+    scenario = load_scenario(LINE)
+    assert scenario.experiment.air_per_stop is None and scenario.circuit.scheduled_demands == ()
+    assert STOP_DEMAND not in scenario.circuit.components()
+    assert "air_per_stop_kg" not in [o.name for o in outputs(scenario.experiment)]
+
+
+def test_the_air_per_stop_is_drawn_over_each_stop_of_the_plan():
+    scenario = load_scenario(LINE, ["service.air_per_stop={normal_volume_m3: 0.05}"])
+    (name, demand), = scenario.circuit.scheduled_demands
+    stops = scenario.experiment.plan.stops
+    assert name == STOP_DEMAND and demand.node == "supply" and len(demand.windows) == len(stops) == 19
+    for (t_on, t_off, q), stop in zip(demand.windows, stops):                # the first stop too, at t = 0
+        assert (t_on, t_off) == (stop.arrive_s, stop.depart_s) and q * (t_off - t_on) == pytest.approx(0.05, rel=1e-14)
+    assert scenario.circuit.components()[STOP_DEMAND].normal_flow_m3_per_s == demand.windows[0][2]   # at t = 0
+    assert "air_per_stop_kg" in [o.name for o in outputs(scenario.experiment)]
+
+
+@pytest.fixture(scope="module")
+def trip_with_air_per_stop():
+    """Three stations 200 m apart, 8 s dwells, one way, k = 0; 50 Nl at every stop beside the
+    line's steady 100 Nl/min, the compressor keeping the 200 l reservoir at 8.5-10 bar."""
+    from cosim.runner import run
+
+    scenario = load_scenario(LINE, ["service.stations=[{name: A, at_m: 0, dwell_s: 8, boarding: 10}, "
+                                    "{name: B, at_m: 200, dwell_s: 8}, {name: C, at_m: 400, dwell_s: 8, alighting: 10}]",
+                                    *ONE_WAY, "service.air_per_stop={normal_volume_m3: 0.05}", "solver.jobs=1"],
+                             k_override=[0.0])
+    return scenario, run(scenario)
+
+
+@pytest.mark.slow
+def test_a_trip_draws_its_air_per_stop_at_the_stops_only(trip_with_air_per_stop):
+    scenario, outcome = trip_with_air_per_stop
+    (row,) = outcome.rows
+    stops = outcome.tables["stops"]
+    rho_n = normal_density_kg_per_m3(AIR.R_J_per_kgK)          # DIN 1343: 1.2923 kg/m^3
+    # the reservoir never nears the atmosphere (the draw's fade-out below 1.2 bar): every stop
+    # draws its full amount at a constant rate, which RK4 integrates exactly, the windows' edges
+    # inside the macro-steps (the master switches there); 1e-9: the round-off of ~1e4 steps' sums
+    assert len(stops) == 3 and row["air_per_stop_kg"] == pytest.approx(3 * 0.05 * rho_n, rel=1e-9)
+    assert row["air_per_stop_NL"] == pytest.approx(150.0, rel=1e-9)
+    for stop in stops:
+        assert stop["air_per_stop_kg"] == pytest.approx(0.05 * rho_n, rel=1e-9)
+    # air_demand_kg: the steady demand's 100 Nl/min over the run and the stops' air
+    t = outcome.series["service"]["time"].values
+    steady = 1.667e-3 * rho_n * (t[-1] - t[0])
+    assert row["air_demand_kg"] == pytest.approx(steady + row["air_per_stop_kg"], rel=1e-9)
+    # the timing: flat outside the stops, bit for bit; rising at its constant rate within them
+    drawn = outcome.series["service"]["air_per_stop_kg"].values.ravel()
+    windows = [(s.arrive_s, s.depart_s) for s in scenario.experiment.plan.stops]
+    within = np.array([any(a < t_off and t_on < b for t_on, t_off in windows) for a, b in zip(t, t[1:])])
+    assert np.all(np.diff(drawn)[~within] == 0.0) and (~within).sum() > 400       # the two runs between stops
+    inside = np.array([any(t_on <= a and b <= t_off for t_on, t_off in windows) for a, b in zip(t, t[1:])])
+    assert np.diff(drawn)[inside] == pytest.approx(0.05 * rho_n / 8.0 * np.diff(t)[inside], rel=1e-9)
+    # the air balance of the chambers (reservoir, bellows, tanks) with the compressor, the steady
+    # demand and the stops' demand: 1e-9 kg, round-off over 75 s of 5 ms steps on ~2 kg of air
+    assert abs(row["mass_balance_error_kg"]) < 1e-9
+    assert row["compressor_air_kg"] > 0.0
