@@ -72,7 +72,11 @@ class _Lazy:
 
     def __call__(self, *args, **kwargs):
         if self._call is None:
-            self._call = _compiled(self.py_func, self._make)
+            compiled = _compiled(self.py_func, self._make)
+            # an elementwise law: numba's DUFunc, whose signatures are fixed (vectorize with a
+            # signature compiles no other); its numpy ufunc runs the same loop without the DUFunc's
+            # Python-level __call__ (a few us per call, the law's own cost on a few elements)
+            self._call = getattr(compiled, "ufunc", compiled)
         return self._call(*args, **kwargs)
 
 
