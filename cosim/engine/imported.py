@@ -29,6 +29,7 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import fmi2Real, fmi2True, fmi2ValueReference
 
 from cosim.engine.master import OUTPUTS, CoSimulation, Output, Sample
 from cosim.errors import ScenarioError
@@ -87,6 +88,14 @@ class FmuCircuit:
         if self.native:
             self._parameters += [("Boolean", ref[spec.lookahead], True), ("Real", ref[spec.macro_step_s], macro_step_s)]
         self.values = np.full(len(self._read), np.nan)
+        # the step's fmi2SetReal and fmi2GetReal take these arrays, built once (FMPy's setReal and
+        # getReal build their ctypes arrays and lists anew on every call)
+        self._inputs_vr = (fmi2ValueReference * len(self.inputs))(*self.inputs)
+        self._inputs_buffer = (fmi2Real * len(self.inputs))()
+        self._inputs_values = np.ctypeslib.as_array(self._inputs_buffer)
+        self._read_vr = (fmi2ValueReference * len(self._read))(*self._read)
+        self._read_buffer = (fmi2Real * len(self._read))()
+        self._read_values = np.ctypeslib.as_array(self._read_buffer)
 
     def start(self, t0: float, z: np.ndarray, zd: np.ndarray) -> None:
         """Parameters and the crushing at ``t0`` set, initialised; the outputs at t0 read."""
@@ -107,8 +116,10 @@ class FmuCircuit:
         """The crushing and its rate at ``t`` (and, with the native exchange, at t + H: ``z1``,
         ``zd1``) in, one communication step to t + H, the outputs at t + H read; an FMI status
         worse than warning raises (FMPy's ``FMICallException``)."""
-        self.slave.setReal(self.inputs, self._values(z, zd, z1, zd1))
-        self.slave.doStep(currentCommunicationPoint=t, communicationStepSize=H)
+        s = self.slave
+        np.concatenate((z, zd, z1, zd1) if self.native else (z, zd), out=self._inputs_values)
+        s.fmi2SetReal(s.component, self._inputs_vr, len(self._inputs_buffer), self._inputs_buffer)
+        s.fmi2DoStep(s.component, t, H, fmi2True)
         self._sample()
 
     def _values(self, z, zd, z1, zd1) -> list:
@@ -123,7 +134,9 @@ class FmuCircuit:
         return (v[:n], v[n:2 * n], v[2 * n:3 * n]) if self.native else (v[:n], None, None)
 
     def _sample(self) -> None:
-        self.values = np.asarray(self.slave.getReal(self._read), dtype=float)
+        s = self.slave
+        s.fmi2GetReal(s.component, self._read_vr, len(self._read_buffer), self._read_buffer)
+        self.values = self._read_values.copy()
 
     def output(self, i: int) -> float:
         """Recorded output ``i`` (pressures, temperatures, air totals in turn), NaN if not mapped."""
