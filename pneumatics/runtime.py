@@ -25,6 +25,7 @@ from .chamber import (
     heat_flow_into_W,
     isothermal_heat_flow_W,
     temperature_rate_K_per_s,
+    upstream_enthalpy_flow_W,
 )
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
@@ -298,7 +299,7 @@ class CircuitRuntime:
         lay, links, pipes = self.layout, self._links, self._pipes
         m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = evaluated or self._evaluate(x2, z2)
         a, b = links.a, links.b
-        Hw = w * (self._cp * np.where(w >= 0.0, T_n[a], T_n[b]))              # upstream total enthalpy
+        Hw = upstream_enthalpy_flow_W(w, T_n[a], T_n[b], self._cp)            # upstream total enthalpy
         mdot = links.incidence @ w                                              # eq. (1)
         Hdot = links.incidence @ Hw
         dx = np.empty_like(x2)
