@@ -29,8 +29,9 @@ from .chamber import (
 )
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
+from .gas import ideal_gas_density_kg_per_m3, ideal_gas_pressure_Pa
 from .orifice import orifice_flow_kg_per_s
-from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
+from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_between_kg_per_s2
 from .valve_signals import lever_chain, set_at_rest, signal_rates
 from .valves import differential_valve_flow_kg_per_s, lever_conductance
 
@@ -118,6 +119,14 @@ class CircuitRuntime:
         self._minus_Ez = -self._chambers.Ez_m2            # -Ez @ zdot: the volumes' rates
         self._air_present = self._air.present
         self._n_orifice_rows = self._orifices.b_critical.shape[0]
+        # the bellows' rows: of their chambers' nominal volumes and volume matrix, and of the
+        # state's masses and temperatures
+        idx = self._chambers.bellow_chamber
+        self._bellow_V0, self._bellow_Ez = self._chambers.V0_m3[idx], self._chambers.Ez_m2[idx]
+        rows = np.arange(self.layout.size)
+        self._bellow_m_rows, self._bellow_T_rows = rows[self.layout.m][idx], rows[self.layout.T][idx]
+        #: each case's polytropic index of the bellows' stiffness: gamma, 1 where isothermal
+        self._polytropic_index = np.where(self._heat.isothermal, 1.0, self.gas.gamma)
 
     # ----------------------------------------------------------------------------- state
     def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
@@ -198,11 +207,11 @@ class CircuitRuntime:
         gas, lay, chambers, links = self.gas, self.layout, self._chambers, self._links
         m, T = x2[lay.m], x2[lay.T]
         V = chambers.V0_m3 - chambers.Ez_m2 @ z2
-        p = m * gas.R_J_per_kgK * T / V                                          # eq. (3)
+        p = ideal_gas_pressure_Pa(m, T, V, gas.R_J_per_kgK)                      # eq. (3)
         n_cases = x2.shape[1]
         p_bnd, T_bnd, C_fixed = self._boundary(n_cases)
         p_n, T_n = np.concatenate([p, p_bnd]), np.concatenate([T, T_bnd])
-        rho_n = p_n / (gas.R_J_per_kgK * T_n)
+        rho_n = ideal_gas_density_kg_per_m3(p_n, T_n, gas.R_J_per_kgK)
         a, b = links.a, links.b
         w = np.empty((len(a), n_cases))
         w[self._pipes.links] = x2[lay.q]
@@ -305,8 +314,8 @@ class CircuitRuntime:
         dx = np.empty_like(x2)
         dx[lay.m] = mdot
         pa, pb = pipes.a, pipes.b
-        dx[lay.q] = pipe_flow_rate_kg_per_s2(x2[lay.q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
-                                             pipes.length_m, pipes.area_m2, pipes.loss_coefficient)  # eq. (5)
+        dx[lay.q] = pipe_flow_rate_between_kg_per_s2(x2[lay.q], p_n[pa], p_n[pb], rho_n[pa], rho_n[pb],
+                                                     pipes.length_m, pipes.area_m2, pipes.loss_coefficient)  # eq. (5)
         cells = pipes.cells
         if cells is not None:
             self._compressible_rates(dx[lay.q], x2[lay.q], m, p_n, T_n, rho_n, w)
@@ -461,10 +470,8 @@ class CircuitRuntime:
         return ((V0 - chambers.Ez_m2[idx] @ z2) / V0).reshape(z.shape)
 
     def bellow_pressures_Pa(self, x2, z2) -> np.ndarray:
-        chambers, lay = self._chambers, self.layout
-        idx = chambers.bellow_chamber
-        V = chambers.V0_m3[idx] - chambers.Ez_m2[idx] @ z2
-        return x2[lay.m][idx] * self.gas.R_J_per_kgK * x2[lay.T][idx] / V
+        V = self._bellow_V0 - self._bellow_Ez @ z2
+        return ideal_gas_pressure_Pa(x2[self._bellow_m_rows], x2[self._bellow_T_rows], V, self.gas.R_J_per_kgK)
 
     def bellow_forces_N(self, x, z_m) -> np.ndarray:
         """Eq. (4) for every bellow; shapes follow ``z_m`` (bellows[, cases])."""
@@ -486,7 +493,7 @@ class CircuitRuntime:
         x2 = x.reshape(self.layout.size, -1)
         z2 = self._per_bellow(z, x2)
         p = self.bellow_pressures_Pa(x2, z2)
-        n = np.where(self._heat.isothermal, 1.0, self.gas.gamma)
+        n = self._polytropic_index
         if self._chambers.area_tables:
             K = np.stack([bellow_stiffness_N_per_m(self.components[b], z2[i], p[i], self.atmosphere.p_Pa, n)
                           for i, b in enumerate(self.bellow_names)])

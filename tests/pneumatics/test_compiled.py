@@ -18,10 +18,10 @@ from pneumatics.chamber import (
     temperature_rate_K_per_s,
     upstream_enthalpy_flow_W,
 )
-from pneumatics.gas import AIR, T_REF_K
+from pneumatics.gas import AIR, T_REF_K, ideal_gas_density_kg_per_m3, ideal_gas_pressure_Pa
 from pneumatics.integrate import hermite_motion
 from pneumatics.orifice import LAMINAR_RATIO, iso6358_mass_flow_kg_per_s, orifice_flow_kg_per_s
-from pneumatics.pipe import pipe_flow_rate_kg_per_s2
+from pneumatics.pipe import pipe_flow_rate_between_kg_per_s2, pipe_flow_rate_kg_per_s2
 from pneumatics.valves import differential_valve_flow_kg_per_s, lever_conductance
 
 RNG = np.random.default_rng(20)
@@ -93,6 +93,18 @@ def test_pipe_flow_rate_is_the_numpy_law_bit_for_bit():
     L, A, K = np.full((N, 1), 1.3), np.full((N, 1), 2.5e-4), np.full((N, 1), 1.11)
     expected = A / L * ((p_a - p_b) - K * q * np.abs(q) / (2.0 * rho * A ** 2))
     np.testing.assert_array_equal(pipe_flow_rate_kg_per_s2(q, p_a, p_b, rho, L, A, K), expected)
+    rho_b = RNG.uniform(1.0, 10.0, (N, 2))
+    np.testing.assert_array_equal(pipe_flow_rate_between_kg_per_s2(q, p_a, p_b, rho, rho_b, L, A, K),
+                                  pipe_flow_rate_kg_per_s2(q, p_a, p_b, 0.5 * (rho + rho_b), L, A, K))
+
+
+def test_the_ideal_gas_laws_are_the_numpy_expressions_bit_for_bit():
+    m, T, V = RNG.uniform(0.01, 1.0, (N, 3)), RNG.uniform(250.0, 350.0, (N, 3)), RNG.uniform(1e-3, 0.05, (N, 1))
+    T[4] = np.nan
+    R = AIR.R_J_per_kgK
+    p = ideal_gas_pressure_Pa(m, T, V, R)
+    np.testing.assert_array_equal(p, m * R * T / V)
+    np.testing.assert_array_equal(ideal_gas_density_kg_per_m3(p, T, R), p / (R * T))
 
 
 def test_the_chambers_thermal_laws_are_the_numpy_laws_bit_for_bit():
@@ -136,6 +148,9 @@ def test_the_hermite_motion_is_the_numpy_expression_bit_for_bit():
     (heat_flow_into_W, (10.0, 300.0, 293.15)),
     (isothermal_heat_flow_W, (300.0, 3e5, 0.01, 3e3, 1e-4, 717.5)),
     (upstream_enthalpy_flow_W, (-0.01, 300.0, 290.0, 1004.5)),
+    (ideal_gas_pressure_Pa, (0.1, 300.0, 0.012, 287.0)),
+    (ideal_gas_density_kg_per_m3, (3e5, 300.0, 287.0)),
+    (pipe_flow_rate_between_kg_per_s2, (0.01, 3e5, 2e5, 3.0, 3.2, 1.0, 2.5e-4, 1.11)),
 ])
 def test_the_compiled_laws_take_floats(law, args):
     """Scalars in, a float out, as the numpy expressions did."""
