@@ -139,6 +139,22 @@ def bellow_stiffness_N_per_m(bellow: Bellow, z_m, p_Pa, p_atm_Pa, polytropic_ind
             + bellow.area_m2(z_m) * polytropic_index * p_Pa * bellow.dV_dz_m2 / V)
 
 
+@elementwise(5)
+def linear_area_bellow_force_N(A0_m2, dA_dz_m, z_m, p_Pa, p_atm_Pa):
+    """Eq. (4) for a bellow without an area table: (A0 + dA/dz z) (p - p_atm), the same operations
+    in the same order as :func:`bellow_force_N` of :meth:`Bellow.area_m2` (compiled: the force
+    of every bellow at every macro-step, one call instead of four numpy operations)."""
+    return (A0_m2 + dA_dz_m * z_m) * (p_Pa - p_atm_Pa)
+
+
+@elementwise(8)
+def linear_area_bellow_stiffness_N_per_m(V0_m3, dV_dz_m2, A0_m2, dA_dz_m, z_m, p_Pa, p_atm_Pa, polytropic_index):
+    """:func:`bellow_stiffness_N_per_m` of a bellow without an area table (its area's slope is
+    dA/dz), the same operations in the same order, compiled as :func:`linear_area_bellow_force_N`."""
+    V = V0_m3 - dV_dz_m2 * z_m
+    return dA_dz_m * (p_Pa - p_atm_Pa) + (A0_m2 + dA_dz_m * z_m) * polytropic_index * p_Pa * dV_dz_m2 / V
+
+
 def quasi_static_stiffness_N_per_m(bellow: Bellow, p0_Pa, V_m3, polytropic_index):
     """Table 2: n A^2 p0 / V (n = gamma adiabatic, 1 isothermal) for a bellow whose air, of total
     volume V (bellow plus tank), is compressed at z = 0: n A0 (dV/dz) p0 / V, with dV/dz = A0 for

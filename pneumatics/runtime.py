@@ -24,6 +24,8 @@ from .chamber import (
     bellow_stiffness_N_per_m,
     heat_flow_into_W,
     isothermal_heat_flow_W,
+    linear_area_bellow_force_N,
+    linear_area_bellow_stiffness_N_per_m,
     temperature_rate_K_per_s,
     upstream_enthalpy_flow_W,
 )
@@ -481,9 +483,10 @@ class CircuitRuntime:
         z2 = self._per_bellow(z, x2)
         if chambers.area_tables:
             A = np.stack([self.components[b].area_m2(z2[i]) for i, b in enumerate(self.bellow_names)])
-        else:
-            A = chambers.A0_m2 + chambers.dA_dz_m * z2
-        F = bellow_force_N(A, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
+            F = bellow_force_N(A, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
+        else:                                              # A = A0 + dA/dz z
+            F = linear_area_bellow_force_N(chambers.A0_m2, chambers.dA_dz_m, z2, self.bellow_pressures_Pa(x2, z2),
+                                           self.atmosphere.p_Pa)
         return F.reshape(z.shape)
 
     def bellow_stiffness_N_per_m(self, x, z_m) -> np.ndarray:
@@ -498,7 +501,8 @@ class CircuitRuntime:
             K = np.stack([bellow_stiffness_N_per_m(self.components[b], z2[i], p[i], self.atmosphere.p_Pa, n)
                           for i, b in enumerate(self.bellow_names)])
         else:
-            K = bellow_stiffness_N_per_m(self._chambers.bellow_columns, z2, p, self.atmosphere.p_Pa, n)
+            b = self._chambers.bellow_columns
+            K = linear_area_bellow_stiffness_N_per_m(b.V0_m3, b.dV_dz_m2, b.A0_m2, b.dA_dz_m, z2, p, self.atmosphere.p_Pa, n)
         return K.reshape(z.shape)
 
     # ----------------------------------------------------------------------------- air accounts

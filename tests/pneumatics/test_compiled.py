@@ -13,8 +13,13 @@ import numpy as np
 import pytest
 
 from pneumatics.chamber import (
+    Bellow,
+    bellow_force_N,
+    bellow_stiffness_N_per_m,
     heat_flow_into_W,
     isothermal_heat_flow_W,
+    linear_area_bellow_force_N,
+    linear_area_bellow_stiffness_N_per_m,
     temperature_rate_K_per_s,
     upstream_enthalpy_flow_W,
 )
@@ -128,6 +133,20 @@ def test_the_chambers_thermal_laws_are_the_numpy_laws_bit_for_bit():
         np.testing.assert_array_equal(upstream_enthalpy_flow_W(w, T, T_b, cp), w * (cp * np.where(w >= 0.0, T, T_b)))
 
 
+def test_the_bellows_force_and_stiffness_are_the_numpy_laws_bit_for_bit():
+    """Eq. (4) and dF/dz of bellows without an area table, (bellows, 1) columns against
+    (bellows, cases), as the circuit calls them."""
+    col = {f: RNG.uniform(lo, hi, (N, 1)) for f, lo, hi in (("V0_m3", 0.01, 0.05), ("dV_dz_m2", 0.05, 0.3),
+                                                            ("A0_m2", 0.05, 0.3), ("dA_dz_m", -2.0, 2.0))}
+    z, p, n = RNG.normal(0.0, 0.03, (N, 3)), RNG.uniform(1e5, 9e5, (N, 3)), np.array([AIR.gamma, 1.0, AIR.gamma])
+    p[6] = np.nan
+    columns = Bellow(**col)
+    np.testing.assert_array_equal(linear_area_bellow_force_N(col["A0_m2"], col["dA_dz_m"], z, p, 1.013e5),
+                                  bellow_force_N(col["A0_m2"] + col["dA_dz_m"] * z, p, 1.013e5))
+    np.testing.assert_array_equal(linear_area_bellow_stiffness_N_per_m(*col.values(), z, p, 1.013e5, n),
+                                  bellow_stiffness_N_per_m(columns, z, p, 1.013e5, n))
+
+
 def test_the_hermite_motion_is_the_numpy_expression_bit_for_bit():
     """The master's motion over a macro-step (bellows x cases), at its ends and inside it."""
     z0, zd0, z1, zd1 = (RNG.normal(0.0, 0.02, (4, 7)) for _ in range(4))
@@ -151,6 +170,8 @@ def test_the_hermite_motion_is_the_numpy_expression_bit_for_bit():
     (ideal_gas_pressure_Pa, (0.1, 300.0, 0.012, 287.0)),
     (ideal_gas_density_kg_per_m3, (3e5, 300.0, 287.0)),
     (pipe_flow_rate_between_kg_per_s2, (0.01, 3e5, 2e5, 3.0, 3.2, 1.0, 2.5e-4, 1.11)),
+    (linear_area_bellow_force_N, (0.13, 0.5, 0.01, 5e5, 1.013e5)),
+    (linear_area_bellow_stiffness_N_per_m, (0.012, 0.13, 0.13, 0.5, 0.01, 5e5, 1.013e5, 1.4)),
 ])
 def test_the_compiled_laws_take_floats(law, args):
     """Scalars in, a float out, as the numpy expressions did."""
