@@ -87,11 +87,12 @@ def bellow_force_N(A_e_m2, p_Pa, p_atm_Pa):
     return A_e_m2 * (p_Pa - p_atm_Pa)
 
 
-# The laws of eqs (2) and (8) below are evaluated on every chamber at every stage of the
-# integrator: compiled (:mod:`pneumatics.compiled`), one call instead of a numpy operation per
-# term, the same operations in the same order (tests/pneumatics/test_compiled.py).
+# Eq. (2) and the enthalpy its flows carry are evaluated on every chamber and link at every stage
+# of the integrator: compiled (:mod:`pneumatics.compiled`: one call instead of a numpy operation
+# per term, the same operations in the same order; tests/pneumatics/test_compiled.py). A compiled
+# law costs ~60 ms to load in every process that calls it (numba builds its ufunc's loop anew):
+# only the laws with many terms are, not eq. (8) (two) nor the isothermal heat flow.
 
-@elementwise(3)
 def heat_flow_into_W(k_W_per_K, T_K, T_atm_K):
     """Heat flow INTO a chamber from the atmosphere, eq. (8) with the physical sign.
 
@@ -115,7 +116,6 @@ def temperature_rate_K_per_s(m_kg, T_K, p_Pa, mdot_in_kg_per_s, Hdot_in_W, Qdot_
         m_kg * cv_J_per_kgK)
 
 
-@elementwise(6)
 def isothermal_heat_flow_W(T_K, p_Pa, mdot_in_kg_per_s, Hdot_in_W, Vdot_m3_per_s, cv_J_per_kgK):
     """Heat flow that holds T constant (the k -> infinity limit): eq. (2) solved for dQ/dt with dT/dt = 0."""
     return cv_J_per_kgK * T_K * mdot_in_kg_per_s - Hdot_in_W + p_Pa * Vdot_m3_per_s
@@ -137,22 +137,6 @@ def bellow_stiffness_N_per_m(bellow: Bellow, z_m, p_Pa, p_atm_Pa, polytropic_ind
     V = bellow.volume_m3(z_m)
     return (bellow.area_slope_m(z_m) * (p_Pa - p_atm_Pa)
             + bellow.area_m2(z_m) * polytropic_index * p_Pa * bellow.dV_dz_m2 / V)
-
-
-@elementwise(5)
-def linear_area_bellow_force_N(A0_m2, dA_dz_m, z_m, p_Pa, p_atm_Pa):
-    """Eq. (4) for a bellow without an area table: (A0 + dA/dz z) (p - p_atm), the same operations
-    in the same order as :func:`bellow_force_N` of :meth:`Bellow.area_m2` (compiled: the force
-    of every bellow at every macro-step, one call instead of four numpy operations)."""
-    return (A0_m2 + dA_dz_m * z_m) * (p_Pa - p_atm_Pa)
-
-
-@elementwise(8)
-def linear_area_bellow_stiffness_N_per_m(V0_m3, dV_dz_m2, A0_m2, dA_dz_m, z_m, p_Pa, p_atm_Pa, polytropic_index):
-    """:func:`bellow_stiffness_N_per_m` of a bellow without an area table (its area's slope is
-    dA/dz), the same operations in the same order, compiled as :func:`linear_area_bellow_force_N`."""
-    V = V0_m3 - dV_dz_m2 * z_m
-    return dA_dz_m * (p_Pa - p_atm_Pa) + (A0_m2 + dA_dz_m * z_m) * polytropic_index * p_Pa * dV_dz_m2 / V
 
 
 def quasi_static_stiffness_N_per_m(bellow: Bellow, p0_Pa, V_m3, polytropic_index):

@@ -8,8 +8,6 @@ from dataclasses import dataclass
 
 from pneumorail.quantities import Range
 
-from .compiled import elementwise
-
 #: ISO 6358 reference conditions (paper §2.3): T_ref = 293.15 K, p_ref = 1 bar.
 T_REF_K = 293.15
 P_REF_PA = 1.0e5
@@ -53,16 +51,3 @@ class Gas:
 
 
 AIR = Gas()
-
-
-@elementwise(4)
-def ideal_gas_pressure_Pa(m_kg, T_K, V_m3, R_J_per_kgK):
-    """Eq. (3), p = M R T / V (:meth:`Gas.pressure_Pa`, the same operations in the same order):
-    compiled (:mod:`pneumatics.compiled`) for the circuit's every evaluation."""
-    return m_kg * R_J_per_kgK * T_K / V_m3
-
-
-@elementwise(3)
-def ideal_gas_density_kg_per_m3(p_Pa, T_K, R_J_per_kgK):
-    """rho = p / (R T), compiled as :func:`ideal_gas_pressure_Pa`."""
-    return p_Pa / (R_J_per_kgK * T_K)

@@ -13,7 +13,7 @@ import numpy as np
 
 from pneumorail.quantities import nonnegative, plausible, positive, ranged
 
-from .compiled import elementwise, scalar
+from .compiled import elementwise
 
 
 @dataclass(frozen=True)
@@ -54,27 +54,12 @@ class Pipe:
         return (self.friction_factor or 0.0) * self.length_m / self.diameter_m + self.zeta
 
 
-@scalar
-def _pipe_flow_rate(q_kg_per_s, p_a_Pa, p_b_Pa, rho_kg_per_m3, length_m, area_m2, loss_coefficient):
-    """Eq. (5) for one pipe (see :func:`pipe_flow_rate_kg_per_s2`)."""
-    drop = loss_coefficient * q_kg_per_s * abs(q_kg_per_s) / (2.0 * rho_kg_per_m3 * (area_m2 * area_m2))
-    return area_m2 / length_m * ((p_a_Pa - p_b_Pa) - drop)
-
-
 @elementwise(7)
 def pipe_flow_rate_kg_per_s2(q_kg_per_s, p_a_Pa, p_b_Pa, rho_kg_per_m3, length_m, area_m2, loss_coefficient):
     """Eq. (5): dq/dt = A/L ((p_a - p_b) - (lambda L/d + zeta) q |q| / (2 rho A^2)). Arrays
     broadcast (compiled, :mod:`pneumatics.compiled`)."""
-    return _pipe_flow_rate(q_kg_per_s, p_a_Pa, p_b_Pa, rho_kg_per_m3, length_m, area_m2, loss_coefficient)
-
-
-@elementwise(8)
-def pipe_flow_rate_between_kg_per_s2(q_kg_per_s, p_a_Pa, p_b_Pa, rho_a_kg_per_m3, rho_b_kg_per_m3, length_m, area_m2,
-                                     loss_coefficient):
-    """Eq. (5) with rho the mean of the ends' densities, 0.5 (rho_a + rho_b): what the circuit
-    gives :func:`pipe_flow_rate_kg_per_s2`, without the two numpy operations of the mean."""
-    return _pipe_flow_rate(q_kg_per_s, p_a_Pa, p_b_Pa, 0.5 * (rho_a_kg_per_m3 + rho_b_kg_per_m3), length_m, area_m2,
-                           loss_coefficient)
+    drop = loss_coefficient * q_kg_per_s * abs(q_kg_per_s) / (2.0 * rho_kg_per_m3 * (area_m2 * area_m2))
+    return area_m2 / length_m * ((p_a_Pa - p_b_Pa) - drop)
 
 
 #: Pressure difference [Pa] below which the quasi-steady pipe law is rounded off to stay differentiable.

@@ -24,16 +24,13 @@ from .chamber import (
     bellow_stiffness_N_per_m,
     heat_flow_into_W,
     isothermal_heat_flow_W,
-    linear_area_bellow_force_N,
-    linear_area_bellow_stiffness_N_per_m,
     temperature_rate_K_per_s,
     upstream_enthalpy_flow_W,
 )
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
-from .gas import ideal_gas_density_kg_per_m3, ideal_gas_pressure_Pa
 from .orifice import orifice_flow_kg_per_s
-from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_between_kg_per_s2
+from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
 from .valve_signals import lever_chain, set_at_rest, signal_rates
 from .valves import differential_valve_flow_kg_per_s, lever_conductance
 
@@ -209,11 +206,11 @@ class CircuitRuntime:
         gas, lay, chambers, links = self.gas, self.layout, self._chambers, self._links
         m, T = x2[lay.m], x2[lay.T]
         V = chambers.V0_m3 - chambers.Ez_m2 @ z2
-        p = ideal_gas_pressure_Pa(m, T, V, gas.R_J_per_kgK)                      # eq. (3)
+        p = m * gas.R_J_per_kgK * T / V                                          # eq. (3)
         n_cases = x2.shape[1]
         p_bnd, T_bnd, C_fixed = self._boundary(n_cases)
         p_n, T_n = np.concatenate([p, p_bnd]), np.concatenate([T, T_bnd])
-        rho_n = ideal_gas_density_kg_per_m3(p_n, T_n, gas.R_J_per_kgK)
+        rho_n = p_n / (gas.R_J_per_kgK * T_n)
         a, b = links.a, links.b
         w = np.empty((len(a), n_cases))
         w[self._pipes.links] = x2[lay.q]
@@ -316,8 +313,8 @@ class CircuitRuntime:
         dx = np.empty_like(x2)
         dx[lay.m] = mdot
         pa, pb = pipes.a, pipes.b
-        dx[lay.q] = pipe_flow_rate_between_kg_per_s2(x2[lay.q], p_n[pa], p_n[pb], rho_n[pa], rho_n[pb],
-                                                     pipes.length_m, pipes.area_m2, pipes.loss_coefficient)  # eq. (5)
+        dx[lay.q] = pipe_flow_rate_kg_per_s2(x2[lay.q], p_n[pa], p_n[pb], 0.5 * (rho_n[pa] + rho_n[pb]),
+                                             pipes.length_m, pipes.area_m2, pipes.loss_coefficient)  # eq. (5)
         cells = pipes.cells
         if cells is not None:
             self._compressible_rates(dx[lay.q], x2[lay.q], m, p_n, T_n, rho_n, w)
@@ -473,7 +470,7 @@ class CircuitRuntime:
 
     def bellow_pressures_Pa(self, x2, z2) -> np.ndarray:
         V = self._bellow_V0 - self._bellow_Ez @ z2
-        return ideal_gas_pressure_Pa(x2[self._bellow_m_rows], x2[self._bellow_T_rows], V, self.gas.R_J_per_kgK)
+        return x2[self._bellow_m_rows] * self.gas.R_J_per_kgK * x2[self._bellow_T_rows] / V
 
     def bellow_forces_N(self, x, z_m) -> np.ndarray:
         """Eq. (4) for every bellow; shapes follow ``z_m`` (bellows[, cases])."""
@@ -483,10 +480,9 @@ class CircuitRuntime:
         z2 = self._per_bellow(z, x2)
         if chambers.area_tables:
             A = np.stack([self.components[b].area_m2(z2[i]) for i, b in enumerate(self.bellow_names)])
-            F = bellow_force_N(A, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
-        else:                                              # A = A0 + dA/dz z
-            F = linear_area_bellow_force_N(chambers.A0_m2, chambers.dA_dz_m, z2, self.bellow_pressures_Pa(x2, z2),
-                                           self.atmosphere.p_Pa)
+        else:
+            A = chambers.A0_m2 + chambers.dA_dz_m * z2
+        F = bellow_force_N(A, self.bellow_pressures_Pa(x2, z2), self.atmosphere.p_Pa)
         return F.reshape(z.shape)
 
     def bellow_stiffness_N_per_m(self, x, z_m) -> np.ndarray:
@@ -501,8 +497,7 @@ class CircuitRuntime:
             K = np.stack([bellow_stiffness_N_per_m(self.components[b], z2[i], p[i], self.atmosphere.p_Pa, n)
                           for i, b in enumerate(self.bellow_names)])
         else:
-            b = self._chambers.bellow_columns
-            K = linear_area_bellow_stiffness_N_per_m(b.V0_m3, b.dV_dz_m2, b.A0_m2, b.dA_dz_m, z2, p, self.atmosphere.p_Pa, n)
+            K = bellow_stiffness_N_per_m(self._chambers.bellow_columns, z2, p, self.atmosphere.p_Pa, n)
         return K.reshape(z.shape)
 
     # ----------------------------------------------------------------------------- air accounts
