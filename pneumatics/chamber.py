@@ -12,6 +12,7 @@ import numpy as np
 
 from pneumorail.quantities import plausible, ranged
 
+from .compiled import elementwise
 from .gas import ABSOLUTE_PRESSURE, AIR_TEMPERATURE
 from .heat_transfer import ChamberHeat
 
@@ -96,6 +97,12 @@ def bellow_force_N(A_e_m2, p_Pa, p_atm_Pa):
     return A_e_m2 * (p_Pa - p_atm_Pa)
 
 
+# Eq. (2) and the enthalpy its flows carry are evaluated on every chamber and link at every stage
+# of the integrator: compiled (:mod:`pneumatics.compiled`: one call instead of a numpy operation
+# per term, the same operations in the same order; tests/pneumatics/test_compiled.py). A compiled
+# law costs ~60 ms to load in every process that calls it (numba builds its ufunc's loop anew):
+# only the laws with many terms are, not eq. (8) (two) nor the isothermal heat flow.
+
 def heat_flow_into_W(k_W_per_K, T_K, T_atm_K):
     """Heat flow INTO a chamber from the atmosphere, eq. (8) with the physical sign.
 
@@ -106,6 +113,7 @@ def heat_flow_into_W(k_W_per_K, T_K, T_atm_K):
     return k_W_per_K * (T_atm_K - T_K)
 
 
+@elementwise(8)
 def temperature_rate_K_per_s(m_kg, T_K, p_Pa, mdot_in_kg_per_s, Hdot_in_W, Qdot_in_W, Vdot_m3_per_s,
                              cv_J_per_kgK):
     """First law for an open chamber, eq. (2).
@@ -121,6 +129,13 @@ def temperature_rate_K_per_s(m_kg, T_K, p_Pa, mdot_in_kg_per_s, Hdot_in_W, Qdot_
 def isothermal_heat_flow_W(T_K, p_Pa, mdot_in_kg_per_s, Hdot_in_W, Vdot_m3_per_s, cv_J_per_kgK):
     """Heat flow that holds T constant (the k -> infinity limit): eq. (2) solved for dQ/dt with dT/dt = 0."""
     return cv_J_per_kgK * T_K * mdot_in_kg_per_s - Hdot_in_W + p_Pa * Vdot_m3_per_s
+
+
+@elementwise(4)
+def upstream_enthalpy_flow_W(w_kg_per_s, T_a_K, T_b_K, cp_J_per_kgK):
+    """The total enthalpy a link's flow w (a -> b) carries, eq. (2)'s q_i h_i: w c_p T of the
+    node upstream (a's for w >= 0, b's otherwise, and for a NaN flow, as np.where has it)."""
+    return w_kg_per_s * (cp_J_per_kgK * (T_a_K if w_kg_per_s >= 0.0 else T_b_K))
 
 
 def bellow_stiffness_N_per_m(bellow: Bellow, z_m, p_Pa, p_atm_Pa, polytropic_index):

@@ -27,7 +27,8 @@ from typing import Callable
 #: the sources whose constants and helpers the compiled laws use: numba checks a cached law
 #: against its own file only, so the laws' cache names carry a digest of all of them (a changed
 #: constant, e.g. gas.T_REF_K, compiles afresh instead of running stale machine code)
-SOURCES = ("compiled.py", "compressible_pipe.py", "gas.py", "heat_transfer.py", "orifice.py", "pipe.py", "valves.py")
+SOURCES = ("chamber.py", "compiled.py", "compressible_pipe.py", "gas.py", "heat_transfer.py", "integrate.py", "orifice.py",
+           "pipe.py", "valves.py")
 _HERE = Path(__file__).resolve().parent
 _HELPERS: list = []
 _LOCK = threading.Lock()
@@ -72,7 +73,11 @@ class _Lazy:
 
     def __call__(self, *args, **kwargs):
         if self._call is None:
-            self._call = _compiled(self.py_func, self._make)
+            compiled = _compiled(self.py_func, self._make)
+            # an elementwise law: numba's DUFunc, whose signatures are fixed (vectorize with a
+            # signature compiles no other); its numpy ufunc runs the same loop without the DUFunc's
+            # Python-level __call__ (a few us per call, the law's own cost on a few elements)
+            self._call = getattr(compiled, "ufunc", compiled)
         return self._call(*args, **kwargs)
 
 

@@ -25,6 +25,7 @@ from .chamber import (
     heat_flow_into_W,
     isothermal_heat_flow_W,
     temperature_rate_K_per_s,
+    upstream_enthalpy_flow_W,
 )
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
@@ -112,6 +113,20 @@ class CircuitRuntime:
                                        np.arange(self._air.demand_links.start, self._air.demand_links.stop)].astype(int)
         self._boundary_columns = {}   # n_cases -> boundary columns repeated (cached)
         self._outflow_signs = {}      # mass_from's link signs by node (cached)
+        # what every evaluation reads, looked up once (the assembly and the gas do not change):
+        # the same numbers as the expressions they stand for
+        self._cp, self._cv = self.gas.cp_J_per_kgK, self.gas.cv_J_per_kgK
+        self._minus_Ez = -self._chambers.Ez_m2            # -Ez @ zdot: the volumes' rates
+        self._air_present = self._air.present
+        self._n_orifice_rows = self._orifices.b_critical.shape[0]
+        # the bellows' rows: of their chambers' nominal volumes and volume matrix, and of the
+        # state's masses and temperatures
+        idx = self._chambers.bellow_chamber
+        self._bellow_V0, self._bellow_Ez = self._chambers.V0_m3[idx], self._chambers.Ez_m2[idx]
+        rows = np.arange(self.layout.size)
+        self._bellow_m_rows, self._bellow_T_rows = rows[self.layout.m][idx], rows[self.layout.T][idx]
+        #: each case's polytropic index of the bellows' stiffness: gamma, 1 where isothermal
+        self._polytropic_index = np.where(self._heat.isothermal_of(self._chambers.bellow_chamber), 1.0, self.gas.gamma)
 
     # ----------------------------------------------------------------------------- state
     def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
@@ -213,15 +228,20 @@ class CircuitRuntime:
         for rows, ia, ib, xp, fp in self._differential.tables:
             w[rows] = differential_valve_flow_kg_per_s(p_n[ia], p_n[ib], xp, fp)
         orifices = self._orifices
-        C = np.empty((orifices.b_critical.shape[0], n_cases))   # fixed orifices, then valve supply and exhaust sides
-        C[:orifices.n_fixed] = C_fixed
-        C_valve = C[orifices.n_fixed:]
-        chain = self._valve_conductances(x2, z2, C_valve) if self._n_valves else None
-        if C.size:
-            ia, ib = orifices.a, orifices.b
-            w[orifices.links] = orifice_flow_kg_per_s(C, orifices.b_critical, p_n[ia], T_n[ia], p_n[ib], T_n[ib], gas)
+        chain = None
+        if self._n_orifice_rows:
+            C = np.empty((self._n_orifice_rows, n_cases))   # fixed orifices, then valve supply and exhaust sides
+            C[:orifices.n_fixed] = C_fixed
+            C_valve = C[orifices.n_fixed:]
+            chain = self._valve_conductances(x2, z2, C_valve) if self._n_valves else None
+            if n_cases:
+                ia, ib = orifices.a, orifices.b
+                w[orifices.links] = orifice_flow_kg_per_s(C, orifices.b_critical, p_n[ia], T_n[ia], p_n[ib], T_n[ib],
+                                                          gas)
+        else:                                              # no orifice, no valve: no conductance
+            C_valve = C_fixed
         air = self._air
-        if air.present:                                    # compressors (governed) and demands
+        if self._air_present:                              # compressors (governed) and demands
             w[air.compressor_links] = x2[lay.governor] * air.w_compressor_kg_per_s
             w[air.demand_links] = demand_flow_kg_per_s(air.w_demand_kg_per_s, p_n[air.demand_node],
                                                        self.atmosphere.p_Pa, air.dp_off_Pa)
@@ -251,7 +271,9 @@ class CircuitRuntime:
     def _per_bellow(self, values, x2: np.ndarray) -> np.ndarray:
         """A bellow input as (bellows, cases); a circuit without bellows takes an empty array."""
         nb = self._n_bellows
-        return np.reshape(values, (nb, -1)) if nb else np.zeros((0, x2.shape[1]))
+        if not nb:
+            return np.zeros((0, x2.shape[1]))
+        return values.reshape(nb, -1) if type(values) is np.ndarray else np.reshape(values, (nb, -1))
 
     def derivatives(self, x, z_m, zdot_m_per_s) -> np.ndarray:
         """d(state)/dt for state ``x`` (size,) or (size, cases) and bellow crushing and rate."""
@@ -286,7 +308,7 @@ class CircuitRuntime:
         lay, links, pipes = self.layout, self._links, self._pipes
         m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = evaluated or self._evaluate(x2, z2)
         a, b = links.a, links.b
-        Hw = w * (self.gas.cp_J_per_kgK * np.where(w >= 0.0, T_n[a], T_n[b]))  # upstream total enthalpy
+        Hw = upstream_enthalpy_flow_W(w, T_n[a], T_n[b], self._cp)            # upstream total enthalpy
         mdot = links.incidence @ w                                              # eq. (1)
         Hdot = links.incidence @ Hw
         dx = np.empty_like(x2)
@@ -408,8 +430,8 @@ class CircuitRuntime:
         the heat flow of eq. 8 or the isothermal one), heat and work accumulators, valve signals."""
         lay, heat = self.layout, self._heat
         m, T, p, mdot, Hdot, chain, conductances = terms
-        cv = self.gas.cv_J_per_kgK
-        Vdot = -self._chambers.Ez_m2 @ zdot2
+        cv = self._cv
+        Vdot = self._minus_Ez @ zdot2
         Qdot = heat_flow_into_W(heat.k_finite_W_per_K, T, self.atmosphere.T_K)   # eq. (8), physical sign
         if conductances is not None:                       # a correlation's k, at this state
             Qdot = np.array(np.broadcast_to(Qdot, T.shape))
@@ -428,8 +450,8 @@ class CircuitRuntime:
             if cells is not None:
                 dT[cells] = dT_cells
         dx[lay.T] = dT
-        dx[lay.heat_in] = Qdot.sum(axis=0)
-        dx[lay.work_in] = -(p * Vdot).sum(axis=0)
+        dx[lay.heat_in] = np.add.reduce(Qdot, axis=0)        # Qdot.sum(axis=0), without its wrappers
+        dx[lay.work_in] = -np.add.reduce(p * Vdot, axis=0)
         if self._dynamics.present:
             dx[lay.valve_signal] = signal_rates(self._dynamics, x2[lay.valve_signal], chain, self._valves.lever_play, zdot2)
 
@@ -486,10 +508,8 @@ class CircuitRuntime:
         return ((V0 - chambers.Ez_m2[idx] @ z2) / V0).reshape(z.shape)
 
     def bellow_pressures_Pa(self, x2, z2) -> np.ndarray:
-        chambers, lay = self._chambers, self.layout
-        idx = chambers.bellow_chamber
-        V = chambers.V0_m3[idx] - chambers.Ez_m2[idx] @ z2
-        return x2[lay.m][idx] * self.gas.R_J_per_kgK * x2[lay.T][idx] / V
+        V = self._bellow_V0 - self._bellow_Ez @ z2
+        return x2[self._bellow_m_rows] * self.gas.R_J_per_kgK * x2[self._bellow_T_rows] / V
 
     def bellow_forces_N(self, x, z_m) -> np.ndarray:
         """Eq. (4) for every bellow; shapes follow ``z_m`` (bellows[, cases])."""
@@ -513,7 +533,7 @@ class CircuitRuntime:
         x2 = x.reshape(self.layout.size, -1)
         z2 = self._per_bellow(z, x2)
         p = self.bellow_pressures_Pa(x2, z2)
-        n = np.where(self._heat.isothermal_of(self._chambers.bellow_chamber), 1.0, self.gas.gamma)
+        n = self._polytropic_index
         if self._chambers.area_tables:
             K = np.stack([bellow_stiffness_N_per_m(self.components[b], z2[i], p[i], self.atmosphere.p_Pa, n)
                           for i, b in enumerate(self.bellow_names)])

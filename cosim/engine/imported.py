@@ -29,6 +29,7 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import fmi2Real, fmi2True, fmi2ValueReference
 
 from cosim.engine.master import OUTPUTS, CoSimulation, Output, Sample
 from cosim.errors import ScenarioError
@@ -45,11 +46,11 @@ class FmuCircuit:
     order of ``spec.bellows`` (FL, FR, RL, RR)."""
 
     def __init__(self, spec: ImportedCircuit, unzipped: str, k_W_per_K: float, pneumatic_step_s: Optional[float],
-                 macro_step_s: float, instance_name: str, scenario_file=None):
+                 macro_step_s: float, instance_name: str, scenario_file=None, model_description=None):
         from fmpy import read_model_description
         from fmpy.fmi2 import FMU2Slave
-        md = read_model_description(unzipped)
-        ref = {v.name: v.valueReference for v in md.modelVariables}
+        md = model_description or read_model_description(unzipped)
+        ref = self._ref = {v.name: v.valueReference for v in md.modelVariables}
         self.spec, self.scenario_file = spec, scenario_file
         self.native = spec.native_exchange
         ends = ("crushing", "rate", "crushing_end", "rate_end") if self.native else ("crushing", "rate")
@@ -87,6 +88,14 @@ class FmuCircuit:
         if self.native:
             self._parameters += [("Boolean", ref[spec.lookahead], True), ("Real", ref[spec.macro_step_s], macro_step_s)]
         self.values = np.full(len(self._read), np.nan)
+        # the step's fmi2SetReal and fmi2GetReal take these arrays, built once (FMPy's setReal and
+        # getReal build their ctypes arrays and lists anew on every call)
+        self._inputs_vr = (fmi2ValueReference * len(self.inputs))(*self.inputs)
+        self._inputs_buffer = (fmi2Real * len(self.inputs))()
+        self._inputs_values = np.ctypeslib.as_array(self._inputs_buffer)
+        self._read_vr = (fmi2ValueReference * len(self._read))(*self._read)
+        self._read_buffer = (fmi2Real * len(self._read))()
+        self._read_values = np.ctypeslib.as_array(self._read_buffer)
 
     def start(self, t0: float, z: np.ndarray, zd: np.ndarray) -> None:
         """Parameters and the crushing at ``t0`` set, initialised; the outputs at t0 read."""
@@ -107,8 +116,10 @@ class FmuCircuit:
         """The crushing and its rate at ``t`` (and, with the native exchange, at t + H: ``z1``,
         ``zd1``) in, one communication step to t + H, the outputs at t + H read; an FMI status
         worse than warning raises (FMPy's ``FMICallException``)."""
-        self.slave.setReal(self.inputs, self._values(z, zd, z1, zd1))
-        self.slave.doStep(currentCommunicationPoint=t, communicationStepSize=H)
+        s = self.slave
+        np.concatenate((z, zd, z1, zd1) if self.native else (z, zd), out=self._inputs_values)
+        s.fmi2SetReal(s.component, self._inputs_vr, len(self._inputs_buffer), self._inputs_buffer)
+        s.fmi2DoStep(s.component, t, H, fmi2True)
         self._sample()
 
     def _values(self, z, zd, z1, zd1) -> list:
@@ -123,7 +134,9 @@ class FmuCircuit:
         return (v[:n], v[n:2 * n], v[2 * n:3 * n]) if self.native else (v[:n], None, None)
 
     def _sample(self) -> None:
-        self.values = np.asarray(self.slave.getReal(self._read), dtype=float)
+        s = self.slave
+        s.fmi2GetReal(s.component, self._read_vr, len(self._read_buffer), self._read_buffer)
+        self.values = self._read_values.copy()
 
     def output(self, i: int) -> float:
         """Recorded output ``i`` (pressures, temperatures, air totals in turn), NaN if not mapped."""
@@ -132,9 +145,7 @@ class FmuCircuit:
 
     def used_step_s(self) -> float:
         """The pneumatic sub-step the FMU initialised with (its ``pneumatic_step_used_s``)."""
-        from fmpy import read_model_description
-        ref = {v.name: v.valueReference for v in read_model_description(self.slave.unzipDirectory).modelVariables}
-        return float(self.slave.getReal([ref[self.spec.pneumatic_step_used_s]])[0])
+        return float(self.slave.getReal([self._ref[self.spec.pneumatic_step_used_s]])[0])
 
     def close(self) -> None:
         try:
@@ -215,7 +226,10 @@ class ImportedCoSimulation(CoSimulation):
         except ScenarioError:
             self.close()
             raise
-        self._F = self._law()[0]
+        #: the FMUs' (force, stiffness, force rate) at the last communication point, read once per
+        #: step (at its end, for the next step's force laws); the force with stopped cases frozen
+        self._laws = self._law()
+        self._F = self._laws[0]
         self._F_end = None  # with the native exchange: the forces the cars feel at the end of the last step
 
     def _law(self):
@@ -228,8 +242,7 @@ class ImportedCoSimulation(CoSimulation):
         """The bellow force laws of this step, each (bellow, case): (F_s, K_n, (F_e - F_s) / H) as
         the master's (:meth:`CoSimulation._force_laws`) from what the FMUs gave at t_n; without
         the native exchange, or with ``coupling: explicit``, the force held."""
-        F_now, K, dF_dt = self._law()
-        F_now[:, ~self.active] = self._F[:, ~self.active]   # stopped cases stay frozen
+        F_now, K, dF_dt = self._F, self._laws[1], self._laws[2]   # stopped cases' forces frozen (step)
         if self.coupling != "linearised":
             zero = np.zeros_like(F_now)
             return F_now, zero, zero
@@ -262,7 +275,8 @@ class ImportedCoSimulation(CoSimulation):
                     if reason and self.active[j]:
                         self._stop(j, f"impossible state: {reason}")
         self._steps += 1
-        F = self._law()[0]
+        self._laws = self._law()
+        F = self._laws[0]
         F[:, ~self.active] = self._F[:, ~self.active]  # stopped cases stay frozen
         self._F = F
         self._F_end = F_start + self.H * F_rate + K * (z1 - self.z)  # what the cars feel at t1
@@ -296,12 +310,13 @@ class ImportedCoSimulation(CoSimulation):
 def build_imported(scenario, k_values: Sequence[float], cars: Sequence, labels: Sequence[str], watch,
                    extra_outputs: Sequence[Output] = ()) -> ImportedCoSimulation:
     """The cars and, per car, an instance of the scenario's FMU at its k (unzipped once)."""
-    from fmpy import extract
+    from fmpy import extract, read_model_description
     spec: ImportedCircuit = scenario.circuit
     unzipped = extract(spec.fmu, unzipdir=tempfile.mkdtemp(prefix="pneumorail_fmu_import_"))
     fmus: List[FmuCircuit] = []
     settings = scenario.solver
     try:
+        md = read_model_description(unzipped)     # once for every instance (the scenario's load checked it)
         h = settings.pneumatic_step_s
         if spec.pneumatic_step_used_s is not None:
             # every case takes the sub-step of all the scenario's k values, as a native run does
@@ -309,12 +324,12 @@ def build_imported(scenario, k_values: Sequence[float], cars: Sequence, labels: 
             zero = np.zeros(len(spec.bellows))
             for k in sorted(set(scenario.k_W_per_K) | set(k_values)):
                 fmus.append(FmuCircuit(spec, unzipped, k, settings.pneumatic_step_s, settings.macro_step_s,
-                                       f"{scenario.name}_probe", scenario.file))
+                                       f"{scenario.name}_probe", scenario.file, md))
                 fmus[-1].start(0.0, zero, zero)
                 h = min(h, fmus[-1].used_step_s())
                 fmus.pop().close()
         for j, k in enumerate(k_values):
-            fmus.append(FmuCircuit(spec, unzipped, k, h, settings.macro_step_s, f"{scenario.name}_{j}", scenario.file))
+            fmus.append(FmuCircuit(spec, unzipped, k, h, settings.macro_step_s, f"{scenario.name}_{j}", scenario.file, md))
     except ScenarioError:
         for fmu in fmus:
             try:

@@ -122,6 +122,7 @@ class PneumorailCircuit(Fmi2Slave):
         self.air_exhausted_kg = 0.0
         self._circuit = None
         self._x = None
+        self._bellow_rows = None            # the bellows' rows among the circuit's chambers
         self._previous_rate = None
         self._rate = (None, None, None)     # (z, zdot, d(state)/dt) of the last outputs
         self._h = self.pneumatic_step_s
@@ -187,6 +188,31 @@ class PneumorailCircuit(Fmi2Slave):
                                         variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact,
                                         description="longest RK4 step of the air within a communication step (shortened at "
                                                     "initialisation if k needs it: pneumatics.integrate.stable_step_s)"))
+        #: every Real's getter, and every Real's setter where it has one, by value reference (:meth:`get_real`)
+        self._real_getters = {vr: v.getter for vr, v in self.vars.items() if isinstance(v, Real)}
+        self._real_setters = {vr: v.setter for vr, v in self.vars.items() if isinstance(v, Real) and v.setter is not None}
+
+    # -- the importer's reads and writes: pythonfmu's, with the variables looked up once -----------
+
+    def get_real(self, vrs):
+        """The values of the Reals ``vrs`` (pythonfmu's :meth:`Fmi2Slave.get_real`, which checks each
+        variable's type on every call: a few us per step of an instance that is read ~25 values)."""
+        getters = self._real_getters
+        try:
+            return [float(getters[vr]()) for vr in vrs]
+        except KeyError:                  # not a Real: pythonfmu's own raises its TypeError
+            return super().get_real(vrs)
+
+    def set_real(self, vrs, values):
+        """Set the Reals ``vrs`` to ``values`` (pythonfmu's :meth:`Fmi2Slave.set_real`, without its
+        per-variable type check)."""
+        setters = self._real_setters
+        try:
+            calls = [setters[vr] for vr in vrs]
+        except KeyError:                  # not a Real, or one without a setter: pythonfmu's own raises
+            return super().set_real(vrs, values)
+        for setter, value in zip(calls, values):
+            setter(value)
 
     # -- the model description: units and the scenario it came from ---------------------------------
 
@@ -222,6 +248,7 @@ class PneumorailCircuit(Fmi2Slave):
         k = math.inf if self.isothermal else self.k_W_per_K
         self._circuit = Circuit(components, k_W_per_K=k)
         self._x = self._circuit.initial_state(pressures_at_rest(components, dict(zip(self.bellows, self.p0_Pa))))
+        self._bellow_rows = [self._circuit.chamber_names.index(b) for b in self.bellows]
         # k may have been raised since the export: its thermal rate may need a shorter step
         self._h = stable_step_s(self._circuit, self._x, self.pneumatic_step_s)
         self._sample(np.array(self.z_m), np.array(self.zdot_m_per_s))
@@ -240,9 +267,10 @@ class PneumorailCircuit(Fmi2Slave):
             def motion(t):
                 return z0 + (t - t0) * (zd0 + 0.5 * (t - t0) * a), zd0 + (t - t0) * a
         # the state's rate at the step's start is known when the outputs were sampled at these very
-        # inputs (a master's crushing at t_k is what it gave as the previous step's end: lookahead)
+        # inputs (a master's crushing at t_k is what it gave as the previous step's end: lookahead);
+        # compared as lists of floats, as np.array_equal compares them (0.0 == -0.0, NaN != NaN)
         z_s, zd_s, rate = self._rate
-        rate0 = rate if np.array_equal(z_s, z0) and np.array_equal(zd_s, zd0) else None
+        rate0 = rate if z_s == self.z_m and zd_s == self.zdot_m_per_s else None
         self._x = advance(self._circuit, self._x, t0, t1, motion, self._h, rate0=rate0)
         self._previous_rate = (t0, zd0)
         self._sample(z1, zd1)
@@ -251,20 +279,21 @@ class PneumorailCircuit(Fmi2Slave):
     def _sample(self, z_m: np.ndarray, zdot_m_per_s: np.ndarray) -> None:
         """The outputs at the current state and crushing ``z_m``, rate ``zdot_m_per_s`` (the
         inputs are left as the importer set them). The stiffness and the force's rate at frozen
-        crushing are those of the co-simulation master's linearised force law (cosim.engine.master)."""
+        crushing are those of the co-simulation master's linearised force law (cosim.engine.master).
+        The pressures and temperatures are the circuit's evaluation's, the force eq. (4) once: what
+        ``circuit.outputs`` gives, without what it computes that the FMU does not output."""
         circuit, x = self._circuit, self._x
         evaluated = circuit.evaluate(x, z_m)
-        out = circuit.outputs(x, z_m, evaluated)
-        chambers = [circuit.chamber_names.index(b) for b in self.bellows]
-        self.F_N[:] = out.bellow_force_N.tolist()
         F = circuit.bellow_forces_N(x, z_m)
         rate, held = circuit.derivatives_and_held(x, z_m, zdot_m_per_s, evaluated)
-        self._rate = (np.array(z_m, dtype=float), np.array(zdot_m_per_s, dtype=float), rate)
+        self._rate = (z_m.tolist(), zdot_m_per_s.tolist(), rate)
         half = 0.5 * self.macro_step_s
+        self.F_N[:] = F.tolist()
         self.dFdt_N_per_s[:] = ((circuit.bellow_forces_N(x + half * held, z_m) - F) / half).tolist()
         self.K_N_per_m[:] = circuit.bellow_stiffness_N_per_m(x, z_m).tolist()
-        self.p_Pa[:] = out.p_Pa[chambers].tolist()
-        self.T_K[:] = out.T_K[chambers].tolist()
+        rows = self._bellow_rows
+        self.p_Pa[:] = evaluated.p[rows, 0].tolist()
+        self.T_K[:] = evaluated.T[rows, 0].tolist()
         self.total_air_mass_kg = float(circuit.total_mass_kg(x))
         nodes = circuit.node_names
         self.air_injected_kg = float(circuit.mass_from(x, "supply")) if "supply" in nodes else 0.0

@@ -12,7 +12,13 @@ import warnings
 import numpy as np
 import pytest
 
+from pneumatics.chamber import (
+    isothermal_heat_flow_W,
+    temperature_rate_K_per_s,
+    upstream_enthalpy_flow_W,
+)
 from pneumatics.gas import AIR, T_REF_K
+from pneumatics.integrate import hermite_motion
 from pneumatics.orifice import LAMINAR_RATIO, iso6358_mass_flow_kg_per_s, orifice_flow_kg_per_s
 from pneumatics.pipe import pipe_flow_rate_kg_per_s2
 from pneumatics.valves import differential_valve_flow_kg_per_s, lever_conductance
@@ -88,9 +94,49 @@ def test_pipe_flow_rate_is_the_numpy_law_bit_for_bit():
     np.testing.assert_array_equal(pipe_flow_rate_kg_per_s2(q, p_a, p_b, rho, L, A, K), expected)
 
 
+def test_the_chambers_thermal_laws_are_the_numpy_laws_bit_for_bit():
+    """Eq. (2), its isothermal heat flow and the upstream enthalpy flow, as the circuit calls them
+    (chambers x cases and scalars), either flow direction, zero and NaN."""
+    m, T, p = RNG.uniform(0.01, 1.0, (N, 3)), RNG.uniform(250.0, 350.0, (N, 3)), RNG.uniform(1e5, 9e5, (N, 3))
+    mdot, Hdot, Vdot = RNG.normal(0.0, 0.05, (N, 3)), RNG.normal(0.0, 1e4, (N, 3)), RNG.normal(0.0, 1e-3, (N, 3))
+    k = RNG.uniform(0.0, 1e4, (N, 1))
+    T[3], mdot[5], m[7] = np.nan, np.nan, 0.0
+    cv, cp = AIR.cv_J_per_kgK, AIR.cp_J_per_kgK
+    with np.errstate(all="ignore"):
+        Q = k * (293.15 - T)
+        np.testing.assert_array_equal(temperature_rate_K_per_s(m, T, p, mdot, Hdot, Q, Vdot, cv),
+                                      (Hdot - cv * T * mdot + Q - p * Vdot) / (m * cv))
+        np.testing.assert_array_equal(isothermal_heat_flow_W(T, p, mdot, Hdot, Vdot, cv),
+                                      cv * T * mdot - Hdot + p * Vdot)
+        w = mdot.copy()
+        w[9], w[11] = 0.0, -0.0
+        T_b = RNG.uniform(250.0, 350.0, (N, 3))
+        np.testing.assert_array_equal(upstream_enthalpy_flow_W(w, T, T_b, cp), w * (cp * np.where(w >= 0.0, T, T_b)))
+
+
+def test_the_hermite_motion_is_the_numpy_expression_bit_for_bit():
+    """The master's motion over a macro-step (bellows x cases) and the FMU's (bellows), at its
+    ends and inside it."""
+    for shape in ((4, 7), (4,)):
+        _check_hermite(*(RNG.normal(0.0, 0.02, shape) for _ in range(4)))
+
+
+def _check_hermite(z0, zd0, z1, zd1):
+    t0, t1 = 0.37, 0.38
+    motion, H, dz = hermite_motion(t0, t1, z0, zd0, z1, zd1), t1 - t0, z1 - z0
+    for t in [t0, t1, t0 + 0.5 * H, *RNG.uniform(t0, t1, 50)]:
+        s = (t - t0) / H
+        s2, s3 = s * s, s * s * s
+        z, zd = motion(t)
+        np.testing.assert_array_equal(z, z0 + (3 * s2 - 2 * s3) * dz + (s - 2 * s2 + s3) * H * zd0 + (s3 - s2) * H * zd1)
+        np.testing.assert_array_equal(zd, (6 * s - 6 * s2) * dz / H + (1 - 4 * s + 3 * s2) * zd0 + (3 * s2 - 2 * s) * zd1)
+
+
 @pytest.mark.parametrize("law, args", [
     (orifice_flow_kg_per_s, (1e-8, 0.3, 3e5, 300.0, 2e5, 290.0)),
     (pipe_flow_rate_kg_per_s2, (0.01, 3e5, 2e5, 3.0, 1.0, 2.5e-4, 1.11)),
+    (temperature_rate_K_per_s, (0.1, 300.0, 3e5, 0.01, 3e3, 10.0, 1e-4, 717.5)),
+    (upstream_enthalpy_flow_W, (-0.01, 300.0, 290.0, 1004.5)),
 ])
 def test_the_compiled_laws_take_floats(law, args):
     """Scalars in, a float out, as the numpy expressions did."""

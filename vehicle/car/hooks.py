@@ -24,6 +24,9 @@ class StepHooks:
         self._joint_x_m = [float(x) + track.path.x0_m for x in wheelset_x_m]
         #: track heading under wheelset 1 at the last step end [rad]
         self.heading_rad = 0.0
+        #: the car's speed at the last step end [m/s] (kinematic guidance on a speed profile that
+        #: stops and starts; otherwise its constant speed, never updated)
+        self.speed_m_per_s = float(track.path.speed_m_per_s)
 
     def set_guidance(self, track_state) -> None:
         """Guidance offsets (see :meth:`.build._Builder.wheelset_guidance`,
@@ -77,6 +80,8 @@ class KinematicStepHooks(StepHooks):
         if path.guided:
             self.set_guidance(state if track.irregularity is None else self._aligned(state, t))
             self.heading_rad = float(state[0, 2])
+            if not path.speed_profile.constant:
+                self.speed_m_per_s = float(path.speed_profile.speed(t))
         if track.rail_height_m is None and not path.canted and track.irregularity is None:
             return True  # level rails: nothing else changes
         t0 = mbs.systemData.GetTime(exu.ConfigurationType.StartOfStep)

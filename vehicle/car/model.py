@@ -302,6 +302,7 @@ class MetroCar:
         if self.payload is not None:
             self.payload.pre_step(mbs, self.model.carbody, t)
         solver.heading_rad = hooks.heading_rad
+        solver.speed_m_per_s = hooks.speed_m_per_s
         return ok
 
     def floor_heights_m(self, points_xy_m) -> np.ndarray:
