@@ -53,7 +53,7 @@ cases (e.g. several k values or frequencies) are integrated as one vectorised sy
 """
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+from typing import Mapping, Optional, Sequence
 
 from .air_supply import AirDemand
 from .assembly import assemble
@@ -94,17 +94,22 @@ class Circuit(CircuitRuntime):
     def with_active_faults(self, active: Sequence[int]) -> "Circuit":
         """The same circuit (same components, faults and state layout) with the faults of
         indices ``active`` having happened."""
-        return Circuit(self._given_components, gas=self.gas, atmosphere=self.atmosphere, k_W_per_K=self.k_W_per_K,
+        return self._variant(self._given_components, active)
+
+    def _variant(self, components: Mapping, active: Sequence[int]) -> "Circuit":
+        """This circuit (gas, atmosphere, k, faults) built of ``components`` with the faults of
+        indices ``active`` having happened."""
+        return Circuit(components, gas=self.gas, atmosphere=self.atmosphere, k_W_per_K=self.k_W_per_K,
                        faults=self.faults, active_faults=active)
 
-    def with_demands(self, demands: Mapping[str, AirDemand]) -> "Circuit":
+    def with_demands(self, demands: Mapping[str, AirDemand], active: Optional[Sequence[int]] = None) -> "Circuit":
         """The same circuit (same components, faults, active faults and state layout) with each air
         demand named in ``demands`` drawing as the demand given there (from the same node): a
-        scheduled demand's rate switched (:class:`~pneumatics.air_supply.ScheduledDemand`)."""
+        scheduled demand's rate switched (:class:`~pneumatics.air_supply.ScheduledDemand`); with
+        ``active``, the faults of those indices having happened instead of this circuit's."""
         for name, demand in demands.items():
             given = self._given_components.get(name)
             if not isinstance(given, AirDemand) or not isinstance(demand, AirDemand) or demand.node != given.node:
                 raise CircuitError([name], "only an air demand of the circuit can be switched, to another rate from "
                                            "the same node")
-        return Circuit({**self._given_components, **demands}, gas=self.gas, atmosphere=self.atmosphere,
-                       k_W_per_K=self.k_W_per_K, faults=self.faults, active_faults=self.active_faults)
+        return self._variant({**self._given_components, **demands}, self.active_faults if active is None else active)

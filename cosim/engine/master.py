@@ -280,8 +280,8 @@ class CoSimulation:
             active = tuple(i for i, f in enumerate(faults) if f.t_s <= t)
             demands = tuple((name, s.at(t)) for name, s in scheduled.items())
             if (active, demands) not in built:
-                base = circuit.with_demands(dict(demands)) if demands else circuit
-                built[active, demands] = base.with_active_faults(active)
+                built[active, demands] = circuit.with_demands(dict(demands), active) if demands else \
+                    circuit.with_active_faults(active)
             switches.append((t, built[active, demands]))
         return switches
 
