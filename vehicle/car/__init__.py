@@ -118,7 +118,8 @@ from ..params import BELLOWS, WHEELS, ContactParams, TrackStructure, VehiclePara
 from .model import EXUDYN_TESTED_MINOR, MetroCar
 from .options import SPECTRAL_RADIUS, CarOptions, ModelOptions, RunSettings, SolverSettings
 from .secondary import SYMBOLIC_OPS
+from .wheel_drive import WheelDrive
 
 __all__ = ["MetroCar", "CarOptions", "ModelOptions", "RunSettings", "SolverSettings", "SPECTRAL_RADIUS",
            "EXUDYN_TESTED_MINOR", "WHEELS", "BELLOWS", "Derailed", "ContactParams", "TrackStructure",
-           "VehicleParams", "SYMBOLIC_OPS"]
+           "VehicleParams", "SYMBOLIC_OPS", "WheelDrive"]

@@ -26,6 +26,7 @@ from .secondary import (
     add_optional_components,
 )
 from .statics import StaticReference
+from .wheel_drive import WheelTorques
 
 esym = exu.symbolic
 
@@ -67,6 +68,8 @@ class CarModel:
     #: the carbody's external force and torque (``carbody_load``), else None
     load_force: Any
     load_torque: Any
+    #: contact guidance driven through the wheels (``drive``): the torques, else None
+    wheel_torques: WheelTorques | None
     #: symbolic variables and functions that must live as long as the system
     keep_alive: list
 
@@ -124,7 +127,8 @@ class _Builder:
         for iw in range(4):
             guidance_vars.append(self.wheelset_guidance(iw))
             self.primary(iw)
-        drive, drive_vars = self.drive() if self.contact is not None and self.path.guided else (None, None)
+        driven_at_centre = self.contact is not None and self.path.guided and self.options.drive is None
+        drive, drive_vars = self.drive() if driven_at_centre else (None, None)
         for name in self.options.held:
             self.hold(name)
         mounts = Mounts(mbs, p, self.carbody, self.bogies, static.bogie_x_m, self.keep_alive)
@@ -132,8 +136,13 @@ class _Builder:
         bumpstops = add_lateral_bumpstops(mounts)
         wheel_contacts, rail_vars, track_bodies = [], [], None
         spin_nodes, wheelset_nodes, track_nodes, contact_object = [], [], [], None
+        wheel_torques = None
         if self.contact is not None:
             spin_nodes, wheelset_nodes, track_nodes, contact_object = self.wheel_rail_contact()
+            if self.options.drive is not None:
+                wheel_torques = WheelTorques.build(
+                    mbs, self.options.drive, spin_nodes, self.bogies, self.contact.track_contact.r0,
+                    p.wheelset_inertia_yy_kg_m2, p.carbody_mass_kg + 2.0 * p.bogie_mass_kg + 4.0 * p.wheelset_mass_kg)
         else:
             wheel_contacts, rail_vars, track_bodies = self.hertz_contacts(rail0_m)
         # optional components (nothing is built when they are off: the same model, bit for bit)
@@ -151,7 +160,7 @@ class _Builder:
         return CarModel(self.ground, self.carbody, self.bogies, self.wheelsets, guidance_vars, drive,
                         drive_vars, airsprings, bumpstops, wheel_contacts, rail_vars, track_bodies,
                         spin_nodes, wheelset_nodes, track_nodes, contact_object, contact_index,
-                        optional, load_force, load_torque, self.keep_alive)
+                        optional, load_force, load_torque, wheel_torques, self.keep_alive)
 
     def wheelset_guidance(self, iw: int) -> tuple:
         """Track guidance of wheelset ``iw`` (see :mod:`vehicle.car`); returns its variables.

@@ -5,6 +5,7 @@ law (:class:`ContactStepHooks`)."""
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import exudyn as exu
 import numpy as np
@@ -111,9 +112,12 @@ class ContactStepHooks(StepHooks):
     and the rails of the contact law, each wheelset's where it is along the track."""
 
     def __init__(self, track: TrackInput, model: CarModel, wheelset_x_m: np.ndarray,
-                 contact: ContactGuidance):
+                 contact: ContactGuidance, payload_kg: Callable[[], float] | None = None):
         super().__init__(track, model, wheelset_x_m)
         self._contact = contact.track_contact
+        #: the torques of a car driven through its wheels (:mod:`.wheel_drive`), else None
+        self.torques = model.wheel_torques
+        self._payload_kg = payload_kg or (lambda: 0.0)
         self._index = model.contact_index
         #: (t, wheelset lateral positions) when a wheelset left the contact table, else None
         self.left_table = None
@@ -152,6 +156,8 @@ class ContactStepHooks(StepHooks):
         if path.guided:  # the offsets predicted at t (the frames may be of t0 or, on a retry, of t)
             track.wheelset_offsets_m = (track.wheelset_offsets_m + wr.longitudinal_offsets(q, q_t, t - t0)
                                         - path.distance_between_m(self._frames_t, t))
+        if self.torques is not None:
+            self._set_torques(mbs, q, q_t, t0, t)
         if not path.speed_profile.constant:          # the law's frames and creepages run at v(t)
             wr.set_speed(path.speed_profile.speed(t))
         state = track.rows(t)
@@ -166,10 +172,25 @@ class ContactStepHooks(StepHooks):
         return True
 
 
+    def _set_torques(self, mbs, q, q_t, t0: float, t: float) -> None:
+        """The wheel torques for the step [t0, t] (:mod:`.wheel_drive`): the profile's mean
+        acceleration over it, the car's mean offset from the profile predicted at t and its rate
+        at t0 (the wheelsets' velocity along their tangents less the profile's speed)."""
+        profile, wr = self.track.path.speed_profile, self._contact
+        v0, v1 = float(profile.speed(t0)), float(profile.speed(t))
+        a_ref = (v1 - v0) / (t - t0) if t > t0 else 0.0
+        along = wr.longitudinal_offsets(q, q_t, 1.0) - wr.longitudinal_offsets(q)   # exact: linear in h
+        offset = float(np.mean(self.track.wheelset_offsets_m))
+        self.torques.set(mbs, a_ref, offset, float(np.mean(along)) - v0, self._payload_kg())
+        if not profile.constant:  # the kept Jacobian's speed rule (.solver) follows the car
+            self.speed_m_per_s = v1
+
+
 def step_hooks(track: TrackInput, model: CarModel, wheelset_x_m: np.ndarray, contact: ContactGuidance | None,
-               rail0_m: np.ndarray) -> KinematicStepHooks | ContactStepHooks:
+               rail0_m: np.ndarray, payload_kg: Callable[[], float] | None = None
+               ) -> KinematicStepHooks | ContactStepHooks:
     """The hooks of a car with the ``contact`` guidance (None: kinematic guidance, its rails at
-    ``rail0_m`` at t = 0)."""
+    ``rail0_m`` at t = 0); ``payload_kg()``: the payload now (a car driven through its wheels)."""
     if contact is None:
         return KinematicStepHooks(track, model, wheelset_x_m, rail0_m)
-    return ContactStepHooks(track, model, wheelset_x_m, contact)
+    return ContactStepHooks(track, model, wheelset_x_m, contact, payload_kg)

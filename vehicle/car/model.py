@@ -156,7 +156,7 @@ class MetroCar:
         static = StaticReference.of(params, self.payload.initial_payload_kg if self.payload else 0.0)
         check_components(params)
         #: where the car is along its track over time (:class:`~.path.CarPath`)
-        self.path = CarPath.plan(run, static.wheelset_x_m, model.contact_guidance)
+        self.path = CarPath.plan(run, static.wheelset_x_m, model.contact_guidance, model.drive is not None)
         #: the wheel-rail contact (:class:`~.contact.ContactGuidance`; None: kinematic guidance)
         self.contact = None
         if model.contact_guidance:
@@ -179,7 +179,8 @@ class MetroCar:
         #: the Maxwell dampers' states (:class:`~.maxwell.MaxwellDampers`)
         self.maxwell = MaxwellDampers(self.model.optional)
         #: what is set before each step (:mod:`.hooks`)
-        self.hooks = step_hooks(self.track_input, self.model, static.wheelset_x_m, self.contact, rail0)
+        self.hooks = step_hooks(self.track_input, self.model, static.wheelset_x_m, self.contact, rail0,
+                                self.payload_kg)
         #: the solver (:class:`~.solver.CarSolver`)
         self.solver = CarSolver(self.mbs, options.solver, options.solver.relative_tolerance(model.contact_guidance),
                                 self._pre_step, refresh_after_turn=model.contact_guidance)

@@ -15,6 +15,7 @@ from ..params import SPECTRAL_RADIUS, ContactParams, TrackStructure
 from ..payload import PayloadBlock
 from ..speed import PhasedSpeedProfile
 from ..track import TrackGeometry
+from .wheel_drive import WheelDrive
 
 #: Newton's relative tolerance with contact guidance. A step's initial residual is ~M a
 #: there (~30 kN in the paper's curve) against ~700 kN with kinematic guidance, where the
@@ -47,8 +48,10 @@ HOLDS = {
 @dataclass(frozen=True)
 class ModelOptions:
     """What is built: the guidance, its contact, the track structure, the optional carbody load,
-    the wheelsets' initial lateral offsets and what is held (:data:`HOLDS`; straight track
-    only). ``track_structure`` None becomes the rigid :class:`~vehicle.params.TrackStructure`."""
+    the wheelsets' initial lateral offsets, what is held (:data:`HOLDS`; straight track
+    only) and how a contact car is moved (``drive``: None, a joint at its centre; a
+    :class:`~.wheel_drive.WheelDrive`, torques on its wheelsets). ``track_structure`` None
+    becomes the rigid :class:`~vehicle.params.TrackStructure`."""
 
     guidance: str = "kinematic"
     contact: ContactParams | None = None
@@ -56,6 +59,7 @@ class ModelOptions:
     carbody_load: bool = False
     wheelset_lateral_offset_m: Sequence[float] | None = None
     held: Sequence[str] = ()
+    drive: WheelDrive | None = None
 
     def __post_init__(self):
         if self.guidance not in GUIDANCES:
@@ -66,6 +70,12 @@ class ModelOptions:
         if self.held and not self.contact_guidance:
             raise ValueError("held needs guidance='contact' (the kinematic guidance holds the wheelsets already)")
         object.__setattr__(self, "held", tuple(self.held))
+        if self.drive is not None:
+            if not isinstance(self.drive, WheelDrive):
+                raise ValueError(f"drive must be a vehicle.car.WheelDrive or None, got {type(self.drive).__name__}")
+            if not self.contact_guidance:
+                raise ValueError("drive (traction and braking through the wheels) needs guidance='contact': the "
+                                 "kinematic guidance holds the wheelsets along the track")
         if self.track_structure is None:
             object.__setattr__(self, "track_structure", TrackStructure())
 

@@ -38,7 +38,8 @@ class CarPath:
     speed_profile: SpeedProfile | PhasedSpeedProfile
 
     @classmethod
-    def plan(cls, run: RunSettings, wheelset_x_m: np.ndarray, contact_guidance: bool) -> CarPath:
+    def plan(cls, run: RunSettings, wheelset_x_m: np.ndarray, contact_guidance: bool,
+             wheel_drive: bool = False) -> CarPath:
         """The path of a car with wheelsets at ``wheelset_x_m`` from its centre; checks the
         straight, level start."""
         track, v, start_s = run.track, float(run.speed_m_per_s), run.start_s_m
@@ -57,9 +58,11 @@ class CarPath:
         if run.deceleration is not None and not contact_guidance:
             raise ValueError("deceleration needs guidance='contact' (the kinematic guidance prescribes a "
                              "constant speed or a speed_profile)")
-        if run.speed_profile is not None and contact_guidance:
-            raise ValueError("a speed_profile needs guidance='kinematic': it stops and starts, and the contact "
-                             "guidance's creepages are relative to v > 0")
+        if run.speed_profile is not None and contact_guidance and not wheel_drive:
+            raise ValueError("a speed_profile with guidance='contact' needs drive=WheelDrive() (traction and "
+                             "braking through the wheels): with guidance='kinematic' the joints lead "
+                             "the wheelsets; the joint that drives a contact car at its centre is for constant "
+                             "speed or a ramp-down")
         return cls(track, v, start_s, s0, start_s, sampler, canted, guided, profile)
 
     def distance_m(self, t):
