@@ -47,7 +47,7 @@ from cosim.limits.watch import StateWatch
 from pneumatics.air_supply import ScheduledDemand
 from pneumatics.circuit import Circuit, CircuitDiverged
 from pneumatics.integrate import advance, hermite_motion, stable_step_s
-from vehicle.errors import Derailed
+from vehicle.errors import Derailed, WheelSlide
 
 COUPLINGS = ("linearised", "explicit")
 
@@ -85,22 +85,27 @@ class Sample:
     floor: Optional[np.ndarray] = None   # the cars' floor accelerations (3, 3, cases), read once
 
 
-def _per_car(method: str, n=None) -> Callable[[Sample], np.ndarray]:
+@dataclass(frozen=True)
+class PerCar:
     """A car output (``MetroCar.<method>()``: shape ``n``, a scalar for n None) stacked over the
-    cases, zeros for a stopped case (it becomes NaN in the record)."""
-    shape = () if n is None else tuple(np.atleast_1d(n))
+    cases, zeros for a stopped case (it becomes NaN in the record); picklable, so that a kind's
+    outputs travel to the worker processes."""
 
-    def read(sample: Sample) -> np.ndarray:
+    method: str
+    n: Optional[int | Tuple[int, ...]] = None
+
+    def __call__(self, sample: Sample) -> np.ndarray:
         cars, active = sample.sim.cars, sample.sim.active
+        shape = () if self.n is None else tuple(np.atleast_1d(self.n).tolist())
         out = np.zeros(shape + (len(cars),))
         for j, car in enumerate(cars):
             if active[j]:
-                out[..., j] = getattr(car, method)()
+                out[..., j] = getattr(car, self.method)()
         return out
-    return read
 
 
-_FLOOR = _per_car("floor_accelerations_m_per_s2", (3, 3))
+
+_FLOOR = PerCar("floor_accelerations_m_per_s2", (3, 3))
 
 
 def _floor_axis(axis: int) -> Callable[[Sample], np.ndarray]:
@@ -134,7 +139,7 @@ def _compression(bound: int) -> Callable[[Sample], np.ndarray]:
 #: What every car run samples, in the order of the Dataset and the CSV columns; a kind that needs
 #: more declares its own (:attr:`cosim.kinds.base.CarKind.outputs`), sampled after these, in its runs only.
 OUTPUTS = (
-    Output("wheel_load_N", ("wheel",), "N", "vertical wheel-rail force Q", "Q_{}_N", _per_car("wheel_loads_N", 8)),
+    Output("wheel_load_N", ("wheel",), "N", "vertical wheel-rail force Q", "Q_{}_N", PerCar("wheel_loads_N", 8)),
     Output("crushing_m", ("bellow",), "m", "bellow crushing z (+ compression)", "z_{}_m", lambda s: s.sim.z),
     Output("bellow_force_N", ("bellow",), "N", "bellow force F", "F_bellow_{}_N", lambda s: s.circuit.bellow_force_N),
     Output("bellow_p_Pa", ("bellow",), "Pa", "bellow pressure p (absolute)", "p_bellow_{}_Pa",
@@ -142,7 +147,7 @@ OUTPUTS = (
     Output("bellow_T_K", ("bellow",), "K", "bellow temperature T", "T_bellow_{}_K",
            lambda s: s.circuit.T_K[s.sim.bellow_chambers]),
     Output("roll_rad", (), "rad", "carbody roll (absolute, positive left side up)", "roll_carbody_rad",
-           _per_car("carbody_roll_rad")),
+           PerCar("carbody_roll_rad")),
     *(Output(f"floor_a{axis}_m_per_s2", ("floor_point",), "m/s2",
              f"floor acceleration along the carbody's {axis} axis ({meaning}; specific force a - g, as an "
              f"accelerometer on the floor measures it)", f"a{axis}_{{}}_m_per_s2", _floor_axis(i))
@@ -168,18 +173,18 @@ OUTPUTS = (
            None, lambda s: s.valve_open.exhaust),
     # wheel-rail contact (guidance: contact only; a kinematic run has none of them)
     Output("lateral_wheel_force_N", ("wheel",), "N", "lateral wheel-rail force Y (+ towards the track centre)",
-           "Y_{}_N", _per_car("lateral_wheel_forces_N", 8), contact=True),
+           "Y_{}_N", PerCar("lateral_wheel_forces_N", 8), contact=True),
     Output("wheelset_lateral_force_N", ("wheelset",), "N", "sum of the lateral wheel forces of a wheelset, ΣY (+ left)",
-           "sumY_{}_N", _per_car("wheelset_lateral_forces_N", 4), contact=True),
+           "sumY_{}_N", PerCar("wheelset_lateral_forces_N", 4), contact=True),
     Output("wheelset_lateral_m", ("wheelset",), "m", "wheelset lateral displacement from the design centre line "
-           "(+ left)", "y_ws_{}_m", _per_car("wheelset_lateral_displacement_m", 4), contact=True),
+           "(+ left)", "y_ws_{}_m", PerCar("wheelset_lateral_displacement_m", 4), contact=True),
     Output("wheelset_lateral_to_rails_m", ("wheelset",), "m", "wheelset lateral displacement relative to its rails "
-           "(+ left; track irregularities subtracted)", "y_ws_rails_{}_m", _per_car("wheelset_lateral_to_rails_m", 4),
+           "(+ left; track irregularities subtracted)", "y_ws_rails_{}_m", PerCar("wheelset_lateral_to_rails_m", 4),
            contact=True),
     Output("angle_of_attack_rad", ("wheelset",), "rad", "wheelset angle of attack (yaw to the track tangent, + to "
-           "the left)", "aoa_{}_rad", _per_car("angle_of_attack_rad", 4), contact=True),
+           "the left)", "aoa_{}_rad", PerCar("angle_of_attack_rad", 4), contact=True),
     Output("flange_contact", ("wheel",), "1", "flange contact (1: contact angle above the flange threshold)",
-           "flange_{}", _per_car("flange_contact", 8), contact=True),
+           "flange_{}", PerCar("flange_contact", 8), contact=True),
     # the air supply beyond the suspension (a compressor, air demands: pneumatics.air_supply)
     Output("compressor_running", (), "1", "compressors running (each 1 while its governor runs it)", "compressor_running",
            lambda s: s.sim.circuit.compressor_running(s.sim.x).sum(axis=0), air_supply=True),
@@ -381,6 +386,8 @@ class CoSimulation:
                 car.advance(t1)
             except Derailed as exc:                   # a physical end, not a numerical one
                 self._stop(j, f"impossible state: derailed: {exc}")
+            except WheelSlide as exc:                 # the same: beyond the adhesion
+                self._stop(j, f"wheel slide: {exc}")
             except RuntimeError as exc:               # the multibody solver gave up
                 self._stop(j, f"multibody solver failed advancing from t = {self.t:.6g} to {t1:.6g} s: {exc}")
 

@@ -20,8 +20,9 @@ and the summary then give what it drew.
 
 The car runs on kinematic guidance (the wheelsets led along the track at the speed profile's
 s(t)): the longitudinal inertia of braking and accelerating reaches the carbody through the
-guidance at the axle centres, not as creep forces at the rails (docs/service.md). Gradients are
-not modelled (the line is level).
+guidance at the axle centres, not as creep forces at the rails (docs/service.md); or, with
+``drive`` (:class:`DriveSpec`), on the wheel-rail contact, braked and driven through its wheels.
+Gradients are not modelled (the line is level).
 """
 from __future__ import annotations
 
@@ -36,7 +37,7 @@ import numpy as np
 import xarray as xr
 
 from cosim.engine.cases import simulate_cases
-from cosim.engine.master import Output
+from cosim.engine.master import Output, PerCar
 from cosim.errors import ScenarioError
 from cosim.kinds.base import CarKind
 from cosim.kinds.station_stop import Doors, FloorHeights, check_doors, openings, payload_kg
@@ -114,6 +115,51 @@ class AirPerStop:
     dp_off_Pa: float = field(default=2.0e4, metadata=DP_OFF)
 
 
+#: a car driven through its wheels divides its creepages by at least this speed [m/s] below it
+#: (vehicle.params.ContactParams.min_creep_speed_m_per_s; 0.01 by default). At 0.01 the creep
+#: law is a 1e9 N s/m damper that saturates at ~1e-5 m/s of slip, and each start from rest and
+#: each stop under the brakes' torque took ~950 fresh Newton Jacobians within a quarter second
+#: while exudyn cut the step to 6 us (measured: a car started at 1 m/s^2 and braked to a stand);
+#: at 0.03 the whole trip took 35, at 0.1 26, with the same wheel loads over 10 s of standing to
+#: 0.2 N and no lateral drift. 0.1 keeps a margin; above it the law is Kalker's.
+WHEEL_DRIVE_MIN_CREEP_SPEED_M_PER_S = 0.1
+#: the track starts this far behind the car's rear wheelset at the first station when the car is
+#: driven through its wheels [m]: standing there on its brakes it may creep back by micrometres
+WHEEL_DRIVE_TRACK_SLACK_M = 1.0
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    """``service.drive``: the car accelerated and braked **through its wheels** (null, the default:
+    kinematic guidance, the cheaper longitudinal model). The car then runs on the wheel-rail
+    contact (free wheelsets, Kalker creep forces, as ``guidance: contact`` of a curve entry) and
+    is moved along the route's speed profile by torques on its wheelsets (vehicle.car.WheelDrive):
+    traction on ``motored_wheelsets`` (1..4 from the front; all four: **assumed**, a motor car
+    Bo'Bo'), braking on all. ``friction_coefficient``: the wheel-rail mu, the adhesion limit
+    (null: 0.36, dry rail; wet rail 0.15-0.25). ``tracking_frequency_Hz`` and
+    ``tracking_damping_ratio``: the driver's feedback on the car's position against the profile.
+    The summary then gives the largest share of the adhesion the wheels used."""
+
+    motored_wheelsets: Tuple[int, ...] = field(default=(1, 2, 3, 4), metadata=plausible(
+        1, 4, why="wheelset numbers from the front", non_empty=True, unique=True))
+    friction_coefficient: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 1.0, why="a wheel-rail friction coefficient; dry rail 0.3-0.5", low_inclusive=False))
+    tracking_frequency_Hz: float = field(default=0.5, metadata=plausible(
+        0.0, 5.0, "Hz", "below the carbody's surge on its traction rods (~5 Hz)", low_inclusive=False))
+    tracking_damping_ratio: float = field(default=1.0, metadata=plausible(0.0, 10.0, low_inclusive=False))
+
+    def wheel_drive(self):
+        """The car's :class:`vehicle.car.WheelDrive`."""
+        from vehicle.car.wheel_drive import WheelDrive
+        return WheelDrive(self.motored_wheelsets, self.tracking_frequency_Hz, self.tracking_damping_ratio)
+
+    def contact_params(self):
+        """The contact's parameters: mu, and the creep regularisation a start and a stop need."""
+        from vehicle.params import ContactParams
+        mu = {} if self.friction_coefficient is None else {"friction_coefficient": self.friction_coefficient}
+        return ContactParams(min_creep_speed_m_per_s=WHEEL_DRIVE_MIN_CREEP_SPEED_M_PER_S, **mu)
+
+
 @dataclass(frozen=True)
 class Service(Doors):
     """A route run by one car (module docstring). ``line_speed_m_per_s``: the speed it cruises
@@ -125,7 +171,8 @@ class Service(Doors):
     spread from the platform side over the floor after departure (**assumed** 15 s). The doors and
     the floor's tolerance as a station stop's (:class:`~cosim.kinds.station_stop.Doors`).
     ``valve_settings``: as the twist's. ``air_per_stop``: the air the brakes and doors take from
-    the main reservoir at every stop (:class:`AirPerStop`; null: none)."""
+    the main reservoir at every stop (:class:`AirPerStop`; null: none). ``drive``: braking and
+    traction through the wheels (:class:`DriveSpec`; null: kinematic guidance)."""
 
     stations: Tuple[StationSpec, ...] = ()
     curves: Tuple[CurveSpec, ...] = ()
@@ -140,6 +187,7 @@ class Service(Doors):
     spread_s: float = field(default=15.0, metadata=plausible(0.0, 600.0, "s", low_inclusive=False))
     valve_settings: Optional[Tuple[bool, ...]] = None
     air_per_stop: Optional[AirPerStop] = None
+    drive: Optional[DriveSpec] = None
     # set at load, not keys: the car's half length (centre to front wheelset) and the payload's settings
     car_half_length_m: float = field(default=6.0, metadata=set_at_load(plausible(0.5, 30.0, "m",
                                                                                   "a car's centre to its front wheelset")))
@@ -164,7 +212,8 @@ def _plan(service: Service) -> Plan:
     return plan(stations, curves, round_trip=service.round_trip, line_speed_m_per_s=service.line_speed_m_per_s,
                 acceleration_m_per_s2=service.acceleration_m_per_s2, braking_m_per_s2=service.braking_m_per_s2,
                 door_open_delay_s=service.door_open_delay_s, door_close_s=service.door_close_s,
-                spread_s=service.spread_s, initial_kg=service.initial_kg, car_half_length_m=service.car_half_length_m)
+                spread_s=service.spread_s, initial_kg=service.initial_kg, car_half_length_m=service.car_half_length_m,
+                slack_m=WHEEL_DRIVE_TRACK_SLACK_M if service.drive is not None else 0.0)
 
 
 def _items(data: Dict, key: str, cls, path: Path) -> Tuple[Any, ...]:
@@ -315,9 +364,11 @@ def make_car(scenario: Scenario):
     service = scenario.experiment
     route, s = service.plan, service.payload_settings
     payload = RoutePayload(route, s.floor_length_m, s.floor_width_m, s.passenger_height_m, s.cog_above_floor_m)
+    drive = {} if service.drive is None else dict(guidance="contact", drive=service.drive.wheel_drive(),
+                                                    contact=service.drive.contact_params(), start_s_m=route.offset_m)
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
                     spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
-                    track=route.track, speed_profile=route.speed, guidance="kinematic", payload=payload)
+                    track=route.track, speed_profile=route.speed, payload=payload, **drive)
 
 
 def air_per_stop_kg(sample) -> np.ndarray:
@@ -334,7 +385,20 @@ def outputs(service: Service) -> Tuple[Output, ...]:
     return tuple(Output(f"floor_{side}_z_m", ("floor_point",), "m", f"floor height above rail top at the {side}-hand "
                         "door thresholds (front, centre, rear door)", f"floor_{side}_z_{{}}_m",
                         FloorHeights(service.door_points(side))) for side in SIDES) + (
-        Output("payload_kg", (), "kg", "payload on board", "payload_kg", payload_kg),) + air
+        Output("payload_kg", (), "kg", "payload on board", "payload_kg", payload_kg),) + air + (
+        DRIVE_OUTPUTS if service.drive is not None else ())
+
+
+#: a car driven through its wheels is warned of once a wheelset's traction or braking uses this
+#: share of its adhesion (|Fx| / (mu N)); the creep law saturates towards 1, where it slides
+ADHESION_WARNING = 0.9
+#: what a car driven through its wheels samples besides a contact car's outputs
+DRIVE_OUTPUTS = (
+    Output("wheelset_longitudinal_force_N", ("wheelset",), "N", "sum of the longitudinal creep forces of a wheelset "
+           "(+ forward: traction; - braking)", "Fx_ws_{}_N", PerCar("wheelset_longitudinal_forces_N", 4), contact=True),
+    Output("adhesion_used", ("wheelset",), "1", "share of the adhesion a wheelset's traction or braking uses, "
+           "|Fx| / (mu N) over its two wheels (1: the limit, it slides)", "adhesion_{}", PerCar("adhesion_used", 4),
+           contact=True))
 
 
 def _at(t: np.ndarray, when: float) -> int:
@@ -399,6 +463,9 @@ def case_row(stops: List[Dict[str, object]], case: xr.Dataset, service: Service,
     rho_n = normal_density_kg_per_m3(gas.R_J_per_kgK)      # a normal litre: DIN 1343, 0 degC and 1.01325 bar
     row["air_injected_NL"] = row["air_injected_kg"] / rho_n * 1e3
     row["air_exhausted_NL"] = row["air_exhausted_kg"] / rho_n * 1e3
+    if "adhesion_used" in case:                            # driven through the wheels
+        row["adhesion_used_max"] = float(np.nanmax(case["adhesion_used"].values))
+        row["longitudinal_force_max_N"] = float(np.nanmax(np.abs(case["wheelset_longitudinal_force_N"].values)))
     if "air_per_stop_kg" in case:                          # its share of air_demand_kg
         row["air_per_stop_kg"] = float(case["air_per_stop_kg"].values[-1])
         row["air_per_stop_NL"] = row["air_per_stop_kg"] / rho_n * 1e3
@@ -421,6 +488,12 @@ def run(scenario: Scenario, progress: Progress) -> Computed:
         head = {"valves": bool(valves), "k_W_per_K": float(k)}
         table += [{**head, **r} for r in stops]
         rows.append({**head, **case_row(stops, case, service, AIR), **fault_columns(scenario, case)})
+        if rows[-1].get("adhesion_used_max", 0.0) >= ADHESION_WARNING:
+            used = case["adhesion_used"].max("wheelset").values
+            first = case["time"].values[np.argmax(used >= ADHESION_WARNING)]
+            warn(found, f"k = {k_label(float(k))}: the wheels used up to {rows[-1]['adhesion_used_max']:.2f} of the "
+                        f"adhesion (first above {ADHESION_WARNING:g} at t = {first:.1f} s): at 1 they slide; lower the "
+                        f"braking or acceleration, or check service.drive.friction_coefficient")
         missed = [r["station"] for r in stops if abs(r["floor_dz_close_m"]) > service.tolerance_m]
         if missed:
             warn(found, f"k = {k_label(float(k))}: the floor misses +-{service.tolerance_m * 1e3:g} mm at door close at "
@@ -501,7 +574,7 @@ class ServiceKind(CarKind):
 
     name, section, experiment = "service", "service", Service
     check_metrics = ("floor_dev_close_m", "floor_dev_max_m", "stops_outside_tolerance", "relevel_max_s",
-                     "valve_openings", "air_injected_kg")
+                     "valve_openings", "air_injected_kg", "adhesion_used_max")
     headline_metrics = ("floor_dev_close_m", "stops_outside_tolerance", "air_injected_kg")
     total_metrics = ("floor_dev_close_m", "floor_dev_max_m", "stops_outside_tolerance", "relevel_max_s",
                      "valve_openings", "air_injected_kg")

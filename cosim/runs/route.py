@@ -161,12 +161,12 @@ def _track(curves: Sequence[LineCurve], offset_m: float, length_m: float) -> Tra
 
 def plan(stations: Sequence[LineStation], curves: Sequence[LineCurve], *, round_trip: bool, line_speed_m_per_s: float,
          acceleration_m_per_s2: float, braking_m_per_s2: float, door_open_delay_s: float, door_close_s: float,
-         spread_s: float, initial_kg: float, car_half_length_m: float) -> Plan:
+         spread_s: float, initial_kg: float, car_half_length_m: float, slack_m: float = 0.0) -> Plan:
     """The route as the car runs it (module docstring). ``car_half_length_m``: from the car centre
-    to its front wheelset (the track starts that far behind the origin and ends that far plus
-    10 m beyond the last stop)."""
+    to its front wheelset (the track starts that far plus ``slack_m`` behind the origin and ends
+    that far plus 10 m beyond the last stop)."""
     line_m = stations[-1].at_m
-    offset = car_half_length_m
+    offset = car_half_length_m + slack_m
     calls = [(st, st.at_m, st.platform_side, "out") for st in stations]
     track_curves = list(curves)
     if round_trip:

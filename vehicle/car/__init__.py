@@ -23,6 +23,7 @@ explicitly; :class:`MetroCar` composes them and keeps the public interface):
 * :mod:`.bellows`: the airspring force laws the co-simulation sets and the bellows' crushing;
 * :mod:`.maxwell`: the Maxwell dampers' internal states, stepped after every step;
 * :mod:`.solver`: the solver and the reuse of its Newton Jacobian;
+* :mod:`.wheel_drive`: traction and braking through the wheels (torques, the driver's law);
 * :mod:`.outputs`: the quantities the car reports (wheel loads, wheel-rail forces, roll, ...);
 * :mod:`.linear`: the car linearised about steady running (contact guidance).
 
@@ -67,6 +68,9 @@ on level track.
   with Shen-Hedrick-Elkins saturation; each wheelset's spin is a coordinate). The car is driven
   at its centre: a joint holds the carbody's position along the track tangent at
   s_c(t) = s_c0 + v t. Before each internal step every wheelset gets its track frame where it is.
+  With ``drive`` (:mod:`.wheel_drive`) there is no such joint: torques on the wheelsets (reacted
+  on the bogie frames) move the car along a speed profile that may stop and start, and the
+  longitudinal creep forces carry its inertia.
   The law runs compiled (numba) as one force user function for the whole car with a
   finite-difference Jacobian. Standstill: creepages are divided by max(v, 0.01 m/s).
 * Track: rigid (the rails are where the geometry puts them) or flexible

@@ -13,6 +13,7 @@ import numpy as np
 from .build import CarModel
 from .contact import ContactGuidance
 from .track_input import TrackInput
+from .wheel_drive import SLIDE_CREEPAGE, SLIDE_SPEED_M_PER_S
 
 
 class StepHooks:
@@ -25,9 +26,13 @@ class StepHooks:
         self._joint_x_m = [float(x) + track.path.x0_m for x in wheelset_x_m]
         #: track heading under wheelset 1 at the last step end [rad]
         self.heading_rad = 0.0
-        #: the car's speed at the last step end [m/s] (kinematic guidance on a speed profile that
-        #: stops and starts; otherwise its constant speed, never updated)
+        #: the car's speed at the last step end [m/s] (a speed profile that stops and starts, with
+        #: kinematic guidance or driven through the wheels; otherwise its constant speed)
         self.speed_m_per_s = float(track.path.speed_m_per_s)
+        #: the torques of a contact car driven through its wheels (:mod:`.wheel_drive`), else None
+        self.torques = None
+        #: (t, longitudinal creepages) when a wheelset driven through its wheels slid, else None
+        self.sliding = None
 
     def set_guidance(self, track_state) -> None:
         """Guidance offsets (see :meth:`.build._Builder.wheelset_guidance`,
@@ -115,7 +120,6 @@ class ContactStepHooks(StepHooks):
                  contact: ContactGuidance, payload_kg: Callable[[], float] | None = None):
         super().__init__(track, model, wheelset_x_m)
         self._contact = contact.track_contact
-        #: the torques of a car driven through its wheels (:mod:`.wheel_drive`), else None
         self.torques = model.wheel_torques
         self._payload_kg = payload_kg or (lambda: 0.0)
         self._index = model.contact_index
@@ -158,6 +162,9 @@ class ContactStepHooks(StepHooks):
                                         - path.distance_between_m(self._frames_t, t))
         if self.torques is not None:
             self._set_torques(mbs, q, q_t, t0, t)
+            if np.abs(self.torques.creepage).max() > SLIDE_CREEPAGE:
+                self.sliding = (t0, self.torques.creepage.copy())
+                return False
         if not path.speed_profile.constant:          # the law's frames and creepages run at v(t)
             wr.set_speed(path.speed_profile.speed(t))
         state = track.rows(t)
@@ -182,6 +189,8 @@ class ContactStepHooks(StepHooks):
         along = wr.longitudinal_offsets(q, q_t, 1.0) - wr.longitudinal_offsets(q)   # exact: linear in h
         offset = float(np.mean(self.track.wheelset_offsets_m))
         self.torques.set(mbs, a_ref, offset, float(np.mean(along)) - v0, self._payload_kg())
+        spin = q_t[6::wr.m]                                 # each wheelset's spin rate [rad/s]
+        self.torques.creepage = (along - wr.r0 * spin) / np.maximum(np.abs(along), SLIDE_SPEED_M_PER_S)
         if not profile.constant:  # the kept Jacobian's speed rule (.solver) follows the car
             self.speed_m_per_s = v1
 

@@ -10,7 +10,7 @@ import operator
 import exudyn as exu
 import numpy as np
 
-from ..errors import Derailed
+from ..errors import Derailed, WheelSlide
 from ..params import ContactParams, VehicleParams
 from .bellows import BellowLaws
 from .build import build_model
@@ -25,6 +25,7 @@ from .secondary import check_components
 from .solver import CarSolver
 from .statics import StaticReference
 from .track_input import TrackInput
+from .wheel_drive import SLIDE_CREEPAGE
 
 __all__ = ["MetroCar", "SPECTRAL_RADIUS", "EXUDYN_TESTED_MINOR"]
 
@@ -83,12 +84,12 @@ class MetroCar:
             and deceleration, ``(hold_s, deceleration_m_per_s2)``: the car keeps v for hold_s, then
             slows down at that rate (the drive, the track frames and the creepages follow v(t));
             None = constant speed.
-        speed_profile: kinematic guidance only: a :class:`~vehicle.speed.PhasedSpeedProfile`, phases
-            of constant acceleration that may stop and start (a train in service); the wheelsets'
-            guidance points run at its s(t), so the longitudinal inertia loads reach the car
-            through the guidance joints at the axle centres (no traction or braking through the
-            wheel-rail contact: the cheaper longitudinal model). ``speed_m_per_s`` must be its
-            speed at t = 0. None = constant speed.
+        speed_profile: a :class:`~vehicle.speed.PhasedSpeedProfile`, phases of constant
+            acceleration that may stop and start (a train in service). Kinematic guidance: the
+            wheelsets' guidance points run at its s(t), so the longitudinal inertia loads reach
+            the car through the guidance joints at the axle centres (the cheaper longitudinal
+            model). Contact guidance: only with ``drive``, torques on the wheelsets follow it.
+            ``speed_m_per_s`` must be its speed at t = 0. None = constant speed.
         start_s_m: arc length [m] of the car centre (midway between the bogie centres) at
             t = 0. Default: the rear wheelset at s = 0 on a ``track``, 0 without one.
         spectral_radius: generalized-alpha spectral radius at infinite frequency, 0 <= rho <= 1
@@ -111,6 +112,12 @@ class MetroCar:
             holds the carbody's position along the track tangent at s_c(t) = s_c0 + v t; its
             reaction is the force that keeps the speed (the rolling resistance of the creep
             forces, curving). Needs ``speed_m_per_s >= 0``.
+        drive: contact guidance only: a :class:`~vehicle.car.wheel_drive.WheelDrive` moves the car
+            by torques on its wheelsets (traction on the motored ones, braking on all, each reacted
+            on its bogie frame) instead of the joint at its centre, so that the longitudinal creep
+            forces carry its inertia and the adhesion limits it; the only way a contact car runs a
+            ``speed_profile`` that stops and starts. A wheelset that slides raises
+            :class:`~vehicle.errors.WheelSlide`. None = driven at its centre.
         contact: parameters of the contact guidance (:class:`~vehicle.params.ContactParams`;
             None = defaults); ignored with kinematic guidance.
         irregularity: track irregularities, ``irregularity(s_m: np.ndarray) -> (lateral_m,
@@ -281,6 +288,14 @@ class MetroCar:
                 f"a wheelset left the contact table at t = {t_out:.4f} s (derailment or "
                 f"flange climb): lateral positions {np.round(1e3 * np.array(y_out), 2)} mm, "
                 f"the table covers {1e3 * lo:g} .. {1e3 * hi:g} mm relative to the rails")
+        if self.hooks.sliding is not None:
+            t_out, creepage = self.hooks.sliding
+            raise WheelSlide(
+                f"wheelset(s) {', '.join(str(i + 1) for i in np.flatnonzero(np.abs(creepage) > SLIDE_CREEPAGE))} slid "
+                f"at t = {t_out:.4f} s: longitudinal creepages {np.round(100 * creepage, 1)} % (sliding beyond "
+                f"{100 * SLIDE_CREEPAGE:g} %): the {'traction' if self.hooks.torques.force_N > 0 else 'braking'} asked "
+                f"{abs(self.hooks.torques.force_N) / 1e3:.1f} kN in all, more than the adhesion at mu = "
+                f"{self.contact.params.friction_coefficient:g} gives those wheelsets")
         if not ok:
             message = f"exudyn: time integration failed at t={self.solver.t_s} s (advance to {t_end_s} s)"
             airborne = self.outputs.airborne_wheelsets()
@@ -333,6 +348,8 @@ class MetroCar:
     contact_state = _output("contact_state")
     lateral_wheel_forces_N = _output("lateral_wheel_forces_N")
     wheelset_lateral_forces_N = _output("wheelset_lateral_forces_N")
+    wheelset_longitudinal_forces_N = _output("wheelset_longitudinal_forces_N")
+    adhesion_used = _output("adhesion_used")
     wheelset_lateral_to_rails_m = _output("wheelset_lateral_to_rails_m")
     wheelset_lateral_displacement_m = _output("wheelset_lateral_displacement_m")
     angle_of_attack_rad = _output("angle_of_attack_rad")

@@ -90,6 +90,29 @@ class CarOutputs:
         Fl = self.contact_state().force_track_N[:, 1]
         return Fl[0::2] + Fl[1::2]
 
+    def wheelset_longitudinal_forces_N(self) -> np.ndarray:
+        """(4,) sum of the two wheels' longitudinal creep forces per wheelset [N], along the track
+        tangent, positive forward (the force of the rails on the wheelset: > 0 in traction, < 0
+        braking). NaN with kinematic guidance."""
+        if self._contact is None:
+            return np.full(4, np.nan)
+        Fx = self.contact_state().force_track_N[:, 0]
+        return Fx[0::2] + Fx[1::2]
+
+    def adhesion_used(self) -> np.ndarray:
+        """(4,) per wheelset the share of its adhesion its traction or braking uses:
+        |F_x,L + F_x,R| / (mu (N_L + N_R)), the utilised adhesion F_x / N over the friction
+        coefficient mu of the contact. 1 is the limit: the creep forces saturate at mu N and the
+        wheelset slides. The sum over the two wheels leaves out what they exchange in a curve
+        (steering: the outer wheel pulled back, the inner pushed, equal and opposite), which takes
+        its own share of each wheel's mu N. NaN with kinematic guidance."""
+        if self._contact is None:
+            return np.full(4, np.nan)
+        state = self.contact_state()
+        mu = self._contact.params.friction_coefficient
+        Fx, N = state.force_track_N[:, 0], state.normal_N
+        return np.abs(Fx[0::2] + Fx[1::2]) / np.maximum(mu * (N[0::2] + N[1::2]), 1e-9)
+
     def wheelset_lateral_to_rails_m(self) -> np.ndarray:
         """(4,) wheelset lateral displacements relative to their rails [m] (+ left; the track's
         irregularities subtracted), contact guidance only."""

@@ -43,8 +43,9 @@ Below the contact's ``min_creep_speed_m_per_s`` the creep law is viscous, not di
 
 Left out:
 * the motors' and gears' rotating inertia (only the wheelsets' spin inertia is in M_e);
-* wheel-slide protection: a demand beyond adhesion lets the wheels slide, the run reports it
-  (:meth:`WheelTorques.sliding`) and the service kind stops with a diagnosis;
+* wheel-slide protection: a demand beyond adhesion lets a wheelset slide; once its creepage
+  passes :data:`SLIDE_CREEPAGE` the car stops (:class:`vehicle.errors.WheelSlide`) and a
+  co-simulation stops the case with a diagnosis;
 * the brake's friction character: a torque is applied as asked for, whatever the wheel's spin.
 """
 from __future__ import annotations
@@ -56,7 +57,15 @@ from typing import Sequence
 import exudyn as exu
 import numpy as np
 
-__all__ = ["WheelDrive", "WheelTorques"]
+__all__ = ["WheelDrive", "WheelTorques", "SLIDE_CREEPAGE"]
+
+#: a wheelset slides once its longitudinal creepage (v - r0 Omega) / v passes this: ten times the
+#: ~0.5 % at which Kalker's law with Shen-Hedrick-Elkins saturation reaches mu N on a 40 kN wheel
+#: (3 mu N / f11, f11 ~ 9 MN): past saturation nothing holds the spin, and the creepage runs away
+SLIDE_CREEPAGE = 0.05
+#: ... relative to the wheelset's speed, or to this speed below it [m/s] (a car at a stand: a slip
+#: of 5 cm/s)
+SLIDE_SPEED_M_PER_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -108,6 +117,8 @@ class WheelTorques:
         self.torques_N_m = np.zeros(4)
         #: the car's mean offset along the track from the profile [m] and its rate [m/s]
         self.offset_m, self.offset_rate_m_per_s = 0.0, 0.0
+        #: per wheelset the longitudinal creepage at the last step's start (> 0 braking)
+        self.creepage = np.zeros(4)
 
     @classmethod
     def build(cls, mbs, drive: WheelDrive, spin_nodes: list, bogies: list, r0_m: float,

@@ -110,6 +110,15 @@ def test_the_passengers_mass_is_conserved_along_the_trip():
     (["service.air_per_stop={}", "circuit.supply={p_Pa: 9.0e+5}", "circuit.compressor=null", "circuit.air_demand=null"],
      "service.air_per_stop", "give circuit.supply a volume"),
     (["service.air_per_stop=null"], None, None),                            # none, as without the key
+    (["service.drive={motored_wheelsets: [0, 1]}"], "service.drive.motored_wheelsets[0]", "[1, 4]"),
+    (["service.drive={motored_wheelsets: [1, 1]}"], "service.drive.motored_wheelsets[1]", "twice"),
+    (["service.drive={motored_wheelsets: []}"], "service.drive.motored_wheelsets", "at least one"),
+    (["service.drive={motored_wheelsets: [1.5]}"], "service.drive.motored_wheelsets[0]", "integer"),
+    (["service.drive={friction_coefficient: 36}"], "service.drive.friction_coefficient", "(0, 1]"),
+    (["service.drive={tracking_frequency_Hz: 0}"], "service.drive.tracking_frequency_Hz", "(0, 5] Hz"),
+    (["service.drive={brakes: all}"], "service.drive.brakes", "unknown key"),
+    (["service.drive=wheels"], "service.drive", "expected a mapping"),
+    (["service.drive={}"], None, None),                                     # through the wheels, defaults
 ])
 def test_a_wrong_route_is_refused_naming_its_key(sets, key, words):
     if key is None:
@@ -212,3 +221,54 @@ def test_a_trip_draws_its_air_per_stop_at_the_stops_only(trip_with_air_per_stop)
     # demand and the stops' demand: 1e-9 kg, round-off over 75 s of 5 ms steps on ~2 kg of air
     assert abs(row["mass_balance_error_kg"]) < 1e-9
     assert row["compressor_air_kg"] > 0.0
+
+
+def test_a_service_driven_through_its_wheels_builds_a_contact_car_with_its_torques():
+    """``service.drive``: the car runs on the contact, moved by torques (no joint at its centre),
+    on the regularised creep a start and a stop need, its track 1 m longer behind the first
+    station (a car on its brakes may creep back); without the key, the kinematic car as before."""
+    from cosim.kinds.service import WHEEL_DRIVE_MIN_CREEP_SPEED_M_PER_S, WHEEL_DRIVE_TRACK_SLACK_M, make_car
+
+    plain = load_scenario(LINE, ["service.stations=[{name: A, at_m: 0}, {name: B, at_m: 300}]", *ONE_WAY])
+    driven = load_scenario(LINE, ["service.stations=[{name: A, at_m: 0}, {name: B, at_m: 300}]", *ONE_WAY,
+                                  "service.drive={motored_wheelsets: [2, 3], friction_coefficient: 0.2}"])
+    assert plain.experiment.drive is None and make_car(plain).guidance == "kinematic"
+    car = make_car(driven)
+    assert car.guidance == "contact" and car.model.drive is None and car.hooks.torques is not None
+    assert car.hooks.torques.drive.motored_wheelsets == (2, 3)
+    assert car.contact_params.friction_coefficient == 0.2
+    assert car.contact_params.min_creep_speed_m_per_s == WHEEL_DRIVE_MIN_CREEP_SPEED_M_PER_S
+    assert driven.experiment.plan.offset_m == plain.experiment.plan.offset_m + WHEEL_DRIVE_TRACK_SLACK_M
+    # the car's centre at the line's origin either way: the stops stand where the stations are
+    assert car.start_s_m == driven.experiment.plan.offset_m
+    names = [o.name for o in outputs(driven.experiment)]
+    assert "adhesion_used" in names and "adhesion_used" not in [o.name for o in outputs(plain.experiment)]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mu, slides", [(0.36, False), (0.08, True)])
+def test_a_trip_through_the_wheels_reports_its_adhesion_or_stops_when_they_slide(mu, slides):
+    """Two stations 150 m apart at 1 m/s^2, k = 100: on dry rail (mu 0.36) the trip completes and
+    the wheelsets use ~0.3 of their adhesion (a / g = 0.10 over mu, plus the load shifted off
+    the leading wheelsets); at mu = 0.08 the traction asks more than the rails give: the case
+    stops at the start with the wheel slide's diagnosis, and what it computed is kept."""
+    from cosim.runner import run
+
+    scenario = load_scenario(LINE, ["service.stations=[{name: A, at_m: 0, dwell_s: 8}, "
+                                    "{name: B, at_m: 150, dwell_s: 8}]", *ONE_WAY, "solver.jobs=1",
+                                    f"service.drive={{friction_coefficient: {mu}}}"], k_override=[100.0])
+    outcome = run(scenario)
+    (row,) = outcome.rows
+    if not slides:
+        assert not outcome.diagnoses and row["stops"] == 2
+        # the feed-forward a = 1 m/s^2 of 26.4 t on ~260 kN of wheel load: 0.10 / 0.36 = 0.28;
+        # the leading wheelset of each bogie unloaded in traction (~3 %): up to ~0.33
+        assert 0.27 < row["adhesion_used_max"] < 0.36
+        assert row["longitudinal_force_max_N"] == pytest.approx(26_400 / 4, rel=0.15)
+        return
+    (diagnosis,) = outcome.diagnoses.values() if isinstance(outcome.diagnoses, dict) else outcome.diagnoses
+    assert "wheel slide" in str(diagnosis) and "mu = 0.08" in str(diagnosis)
+    # kept: the samples of the first dwell (8 s at 0.1 s), before it slid as it started
+    ds = outcome.series["service"]
+    kept = ds["time"].values[np.isfinite(ds["adhesion_used"].values).all(axis=tuple(range(1, ds["adhesion_used"].ndim)))]
+    assert kept.size >= 80 and kept[-1] >= 8.0 - 1e-9

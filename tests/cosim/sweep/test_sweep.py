@@ -505,6 +505,10 @@ SHORT = {
                                    "{name: B, at_m: 13, dwell_s: 2, alighting: 3}]", "--set", "service.curves=[]",
                           "--set", "service.round_trip=false", "--set", "service.door_open_delay_s=0.5",
                           "--set", "service.door_close_s=0.5", "--set", "service.spread_s=3"],
+    "service_wheels.yaml": ["--set", "service.stations=[{name: A, at_m: 0, dwell_s: 2, boarding: 3}, "
+                                     "{name: B, at_m: 13, dwell_s: 2, alighting: 3}]", "--set", "service.curves=[]",
+                            "--set", "service.door_open_delay_s=0.5", "--set", "service.door_close_s=0.5",
+                            "--set", "service.spread_s=3"],
     "stability_ramp.yaml": [*STABILITY, "--set", "stability.nonlinear_speeds_m_per_s=[30]",
                             "--set", "stability.nonlinear_s=1", "--set", "stability.ramp_from_m_per_s=35",
                             "--set", "stability.ramp_decelerations_m_per_s2=[2]", "--set", "stability.ramp_hold_s=1"],
