@@ -102,7 +102,12 @@ on their Hertz contacts (Q = C_H delta^1.5 per wheel), 13 unknowns; the wheelset
 their prescribed x with zero pitch. Each body point moves with its body's exact rotation; every
 connector is written as the model defines it (read from build.py/secondary.py, not copied):
 deflection measured in the mid-frame of its two bodies (rotated by the mean of their pitches),
-force along that frame's axes, applied at the midpoint of its two markers on both bodies:
+force along that frame's axes, applied at the midpoint of its two markers on both bodies. The
+deflection is exudyn's for an intrinsic connector, the translation of the SE(3) logarithm of the
+markers' relative pose: in the plane the mid-frame components times (phi/2) / sin(phi/2), phi
+their relative pitch (1 + phi^2/24: it lengthens a 0.25 m bellow by 2 nm at the 0.5 mrad
+here, the last 4e-9 of the pitch between level 1 and the model; found in
+tests/vehicle/test_wheel_braking.py, where the frames pitch more):
 
 * bellow pair: crush = H - d_z (H = h_u - h_l), force on the carbody 2 (V_0 + k_v crush) along
   the frame's z and -2 k_s d_x along its x;
@@ -114,8 +119,11 @@ force along that frame's axes, applied at the midpoint of its two markers on bot
 Equations: for each body sum F_x = m a (d'Alembert), sum F_z = m g, sum M_y = 0 about its CoG; for
 each wheelset, Hertz load = m_w g + its primary's vertical force. Solved by Newton
 (:func:`scipy.optimize.fsolve`), residual < 1e-9 x 10 kN. Level 1 is level 0 plus (A), (B) and
-(C); it reproduces the model to 4e-9 (pitch) and 1.4e-8 (wheel loads) relative, the model's own
-solver tolerance: the hand derivation and the model agree on where every force acts.
+(C); it reproduces the model to 3e-10 (pitch) and 9e-9 (wheel loads) relative, the model's own
+solver tolerance: the hand derivation and the model agree on where every force acts. (With the
+wheelsets free along x, pushed by creep forces, and the frames taking torque reactions,
+:class:`ThroughWheels`, it is the level 1 of the car moved through its wheels,
+tests/vehicle/test_wheel_braking.py.)
 
 Newton's law
 ------------
@@ -145,7 +153,7 @@ K_BELLOW_N_PER_M = 243e3  #: adiabatic bellow + tank, paper Table 2 (as benchmar
 # 2 %: the issue's tolerance for a hand model against the multibody model.
 HAND_REL_TOL = 0.02
 # Level 1 is the model's own statics: only the solver tolerance and the last transients separate
-# them (measured 1.4e-8 on the wheel loads, 4e-9 on the pitch); 1e-5 leaves a factor ~1000 of
+# them (measured 9e-9 on the wheel loads, 3e-10 on the pitch); 1e-5 leaves a factor ~1000 of
 # margin and still catches the rod force applied 0.1 mm off in height (1.6e-3 of dQ_2).
 LEVEL_1_REL_TOL = 1e-5
 # Newton: the wheelsets' acceleration is prescribed exactly and the other bodies' accelerations
@@ -172,12 +180,18 @@ def hand_symbols(p, k_bellow: float = K_BELLOW_N_PER_M) -> dict:
                 CH=p.hertz_constant_N_per_m1_5)
 
 
+def effective_height(s: dict) -> float:
+    """h_e of the module doc: the height at which rod and shear together push the carbody along x
+    (parallel springs, rod share rho = k_r / (k_r + 2 k_s)); ``s``: :func:`hand_symbols`."""
+    rho = s["kr"] / (s["kr"] + 2.0 * s["ks"])
+    return rho * s["hr"] + (1.0 - rho) * s["hs"]
+
+
 def level_0(p, a: float, k_bellow: float = K_BELLOW_N_PER_M) -> dict:
     """The closed-form rigid hand model (module doc, "Level 0"): carbody pitch theta [rad, + nose
     down], bogie transfer dV_1 [N] and per-wheelset transfer dQ (4,) [N] at acceleration ``a``."""
     s = hand_symbols(p, k_bellow)
-    rho = s["kr"] / (s["kr"] + 2.0 * s["ks"])
-    he = rho * s["hr"] + (1.0 - rho) * s["hs"]
+    he = effective_height(s)
     dV1 = -s["M"] * a * (s["hc"] - he) / s["L"]
     dN = (s["M"] * a / 2.0 * (s["rw"] - he) + s["mb"] * a * (s["rw"] - s["hb"])) / s["w"]
     theta = dV1 * (1.0 / s["kv"] + 1.0 / (2.0 * s["kpz"])) / s["L"]
@@ -190,18 +204,57 @@ def _rot(theta: float) -> np.ndarray:
     return np.array([[c, s], [-s, c]])
 
 
-def level_1(p, a: float, k_bellow: float = K_BELLOW_N_PER_M) -> dict:
+def _deflection(theta0: float, theta1: float, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """Deflection (x, z) of an intrinsic connector from marker p0 on a body pitched theta0 to p1
+    on one pitched theta1, as exudyn measures it: the translation of the SE(3) logarithm of the
+    relative pose, which in the plane is p1 - p0 in the mid-frame (pitched by the mean) times
+    (phi/2) / sin(phi/2), phi = theta1 - theta0 (1 + phi^2/24: 6e-7 at the 3.8 mrad between the
+    carbody and a frame pitched by traction torques, 0.15 um on a 0.25 m bellow)."""
+    phi = theta1 - theta0
+    scale = 1.0 if phi == 0.0 else 0.5 * phi / math.sin(0.5 * phi)
+    return scale * (_rot(0.5 * (theta0 + theta1)).T @ (p1 - p0))
+
+
+@dataclasses.dataclass(frozen=True)
+class ThroughWheels:
+    """What changes in :func:`level_1` when the car is moved through its wheels (contact
+    guidance, tests/vehicle/test_wheel_braking.py) instead of by the guidance joints: the
+    wheelsets are free along x (their positions are unknowns, the mean of the four fixed: the
+    translation along the track is free), each pushed along x at its centre by its creep force
+    (the creep force's moment about the axle goes to the spin coordinate, not the body), and each
+    bogie frame takes the pure moments of its wheelsets' torque reactions."""
+
+    #: height of the wheelset centres at rest [m]
+    rw: float
+    #: vertical approach of the contacts at rest [m]: a wheelset's contacts carry
+    #: 2 Q0 ((delta0 - Zw) / delta0)^1.5 at a heave Zw
+    delta0: float
+    #: (4,) longitudinal creep force on each wheelset [N]; they must sum to M_tot a
+    creep_N: tuple
+    #: (4,) pure moment about +y on the bogie frame carrying each wheelset [N m]
+    frame_moment_N_m: tuple
+
+
+def level_1(p, a: float, k_bellow: float = K_BELLOW_N_PER_M, wheels: ThroughWheels | None = None) -> dict:
     """Quasi-static equilibrium in the deformed geometry (module doc, "Level 1"): carbody pitch
     theta [rad], per-wheelset transfer dQ (4,) [N], the traction rod forces on the carbody (2,) [N]
-    and the displacements (X, Z, theta) of carbody and bogie frames at acceleration ``a``."""
+    and the displacements (X, Z, theta) of carbody and bogie frames at acceleration ``a``; with
+    ``wheels`` the car moved through its wheels (:class:`ThroughWheels`; 17 unknowns, with the
+    wheelsets' x displacements, also returned), else held by the guidance joints."""
     s = hand_symbols(p, k_bellow)
     g, M, mb, mw = s["g"], s["M"], s["mb"], s["mw"]
     xb = (s["L"] / 2.0, -s["L"] / 2.0)
     H, V0 = s["hu"] - s["hl"], M * g / 4.0          # bellow height, static force per bellow
     w2 = s["w"] / 2.0
+    rw, delta0 = (s["rw"], s["delta0"]) if wheels is None else (wheels.rw, wheels.delta0)
+    n = 13 if wheels is None else 17
 
-    def residual(u, rods=None):
+    def hertz(Zw):
+        return 2.0 * s["Q0"] * (np.maximum(delta0 - Zw, 0.0) / delta0) ** 1.5
+
+    def residual(u, rods=None, full=False):
         (Xc, Zc, tc), Zw = u[0:3], u[9:13]
+        Xw = np.zeros(4) if wheels is None else u[13:17]
         bodies = {"c": (Xc, Zc, tc, 0.0, s["hc"])}
         for i in range(2):
             bodies[i] = (*u[3 + 3 * i: 6 + 3 * i], xb[i], s["hb"])
@@ -223,19 +276,19 @@ def level_1(p, a: float, k_bellow: float = K_BELLOW_N_PER_M) -> dict:
         for k in bodies:          # d'Alembert and gravity at the CoG
             m = M if k == "c" else mb
             apply(k, np.array([-m * a, -m * g]), cog(k))
-        wheel_z_force = np.zeros(4)
+        wheel_z_force, wheel_x_force = np.zeros(4), np.zeros(4)
         for i in range(2):
             J = _rot(0.5 * (tc + bodies[i][2]))      # mid-frame of carbody and frame i
             # bellow pair: plates on the frame (bogie centre, h_l) and the carbody (x_i, h_u)
             lower, upper = point(i, [0.0, s["hl"] - s["hb"]]), point("c", [xb[i], s["hu"] - s["hc"]])
-            d = J.T @ (upper - lower)
+            d = _deflection(bodies[i][2], tc, lower, upper)
             f = J @ np.array([-2.0 * s["ks"] * d[0], 2.0 * (V0 + s["kv"] * (H - d[1]))])
             mid = 0.5 * (lower + upper)
             apply("c", f, mid)
             apply(i, -f, mid)
             # traction rod: bogie centre and carbody, both at h_r
             pb, pc = point(i, [0.0, s["hr"] - s["hb"]]), point("c", [xb[i], s["hr"] - s["hc"]])
-            d = J.T @ (pc - pb)
+            d = _deflection(bodies[i][2], tc, pb, pc)
             f = J @ np.array([-s["kr"] * d[0], 0.0])
             if rods is not None:
                 rods.append(-s["kr"] * d[0])
@@ -243,26 +296,36 @@ def level_1(p, a: float, k_bellow: float = K_BELLOW_N_PER_M) -> dict:
             apply("c", f, mid)
             apply(i, -f, mid)
             # primary, two axleboxes per wheelset: frame marker and wheelset centre (held at its
-            # x, unpitched, heave Zw on its contacts); frame: mean of the frame's pitch and 0
+            # x, or moved by Xw through the wheels; unpitched; heave Zw on its contacts); frame:
+            # mean of the frame's pitch and 0
             Jp = _rot(0.5 * bodies[i][2])
             for j, dx in ((2 * i, w2), (2 * i + 1, -w2)):
-                pw = np.array([xb[i] + dx, s["rw"] + Zw[j]])
-                pm = point(i, [dx, s["rw"] - s["hb"]])
-                d = Jp.T @ (pw - pm)
+                pw = np.array([xb[i] + dx + Xw[j], rw + Zw[j]])
+                pm = point(i, [dx, rw - s["hb"]])
+                d = _deflection(bodies[i][2], 0.0, pm, pw)
                 f_w = -Jp @ np.array([2.0 * s["kpx"] * d[0], 2.0 * (s["kpz"] * d[1] + s["P0"])])
                 apply(i, -f_w, 0.5 * (pw + pm))
                 wheel_z_force[j] = f_w[1]
-        hertz = 2.0 * s["CH"] * np.maximum(s["delta0"] - Zw, 0.0) ** 1.5
+                wheel_x_force[j] = f_w[0]
+                if wheels is not None:      # the torque's reaction on the frame: a pure moment
+                    moment[i] += wheels.frame_moment_N_m[j]
         res = [*force["c"], moment["c"], *force[0], moment[0], *force[1], moment[1],
-               *(hertz + wheel_z_force - mw * g)]
+               *(hertz(Zw) + wheel_z_force - mw * g)]
+        if wheels is not None:
+            # the wheelsets along x; all the x equations sum to (creep forces) - M_tot a, so with
+            # creep forces that carry M_tot a one of them is redundant: traded for the gauge
+            along = np.asarray(wheels.creep_N) + wheel_x_force - mw * a
+            res += [*along] if full else [*along[:3], Xw.sum()]
         return np.array(res) / 1e4
 
-    u = fsolve(residual, np.zeros(13), xtol=1e-12, full_output=True)[0]
+    u = fsolve(residual, np.zeros(n), xtol=1e-12, full_output=True)[0]
     rods = []
-    assert np.abs(residual(u, rods)).max() < 1e-9, "level 1 did not converge"
-    Q = 2.0 * s["CH"] * np.maximum(s["delta0"] - u[9:13], 0.0) ** 1.5
-    return dict(theta=float(u[2]), dQ=Q - 2.0 * s["Q0"], rods_N=np.array(rods), carbody=u[0:3],
-                bogies=u[3:9].reshape(2, 3))
+    assert np.abs(residual(u, rods, full=True)).max() < 1e-9, "level 1 did not converge"
+    result = dict(theta=float(u[2]), dQ=hertz(u[9:13]) - 2.0 * s["Q0"], rods_N=np.array(rods),
+                  carbody=u[0:3], bogies=u[3:9].reshape(2, 3))
+    if wheels is not None:
+        result["wheelsets_x"] = u[13:17]
+    return result
 
 
 def guidance_joints(car) -> list:
