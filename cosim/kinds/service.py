@@ -22,7 +22,7 @@ The car runs on kinematic guidance (the wheelsets led along the track at the spe
 s(t)): the longitudinal inertia of braking and accelerating reaches the carbody through the
 guidance at the axle centres, not as creep forces at the rails (docs/service.md); or, with
 ``drive`` (:class:`DriveSpec`), on the wheel-rail contact, braked and driven through its wheels.
-Gradients are not modelled (the line is level).
+``gradients``: the line rises and falls (the car's weight tilts with the grade under its centre).
 """
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ from cosim.results.outcome import Computed, Outcome, warn
 from cosim.results.overlay import Selection, case_series
 from cosim.results.plots import Curve, Figure, Panel, k_legend, save_panels
 from cosim.runs.car import air_columns, fault_columns, of_setting, per_case
-from cosim.runs.route import LineCurve, LineStation, Plan, RoutePayload, plan, run_time_s
+from cosim.runs.route import LineCurve, LineGrade, LineStation, Plan, RoutePayload, plan, run_time_s
 from cosim.runs.track_run import plane_roll_rad
 from cosim.runs.track_spec import CANT, MAX_TRACK_LENGTH_M, RADIUS, SPEED, TRANSITION
 from cosim.scenario.imported import is_imported
@@ -98,6 +98,23 @@ class CurveSpec:
     direction: str = "left"
     cant_rad: float = field(default=0.0, metadata=CANT)
     transition_shape: str = "bloss"
+
+
+@dataclass(frozen=True)
+class GradientSpec:
+    """A gradient of ``service.gradients``: the section from ``at_m`` along the line over
+    ``length_m`` [m] rises at ``grade`` (rise over run, > 0 rising as the car runs outwards;
+    0.04 is 4 %), reached and left over ``transition_m`` at each end, where the grade changes
+    linearly (a vertical curve; **assumed** 50 m: radius 1 250 m at 4 %). The car's weight tilts
+    with the grade under its centre (vehicle/car/gradient.py); on a round trip's way back what
+    rose falls."""
+
+    at_m: float = field(metadata=plausible(0.0, MAX_TRACK_LENGTH_M / 2, "m", "along the line from its first station"))
+    length_m: float = field(metadata=plausible(0.0, MAX_TRACK_LENGTH_M / 2, "m", "a gradient's section",
+                                               low_inclusive=False))
+    grade: float = field(metadata=plausible(-0.1, 0.1, "", "rise over run: metros climb up to ~6 %, rarely more; "
+                                            "0.1 is 10 %", nonzero=True))
+    transition_m: float = field(default=50.0, metadata=plausible(0.0, 1000.0, "m", "a vertical curve's length"))
 
 
 @dataclass(frozen=True)
@@ -172,10 +189,12 @@ class Service(Doors):
     the floor's tolerance as a station stop's (:class:`~cosim.kinds.station_stop.Doors`).
     ``valve_settings``: as the twist's. ``air_per_stop``: the air the brakes and doors take from
     the main reservoir at every stop (:class:`AirPerStop`; null: none). ``drive``: braking and
-    traction through the wheels (:class:`DriveSpec`; null: kinematic guidance)."""
+    traction through the wheels (:class:`DriveSpec`; null: kinematic guidance). ``gradients``:
+    the line's rising and falling sections (:class:`GradientSpec`; none: a level line)."""
 
     stations: Tuple[StationSpec, ...] = ()
     curves: Tuple[CurveSpec, ...] = ()
+    gradients: Tuple[GradientSpec, ...] = ()
     line_speed_m_per_s: float = field(default=70.0 / 3.6, metadata=ranged(SPEED))
     acceleration_m_per_s2: float = field(default=1.0, metadata=plausible(
         0.0, 3.0, "m/s^2", "a train's acceleration; 3 m/s^2 is a third of g", low_inclusive=False))
@@ -209,11 +228,12 @@ def _plan(service: Service) -> Plan:
                 for st in service.stations]
     curves = [LineCurve(c.at_m, c.transition_m, c.arc_m, c.radius_m, 1 if c.direction == "left" else -1, c.cant_rad,
                         c.transition_shape) for c in service.curves]
+    grades = [LineGrade(g.at_m, g.length_m, g.grade, g.transition_m) for g in service.gradients]
     return plan(stations, curves, round_trip=service.round_trip, line_speed_m_per_s=service.line_speed_m_per_s,
                 acceleration_m_per_s2=service.acceleration_m_per_s2, braking_m_per_s2=service.braking_m_per_s2,
                 door_open_delay_s=service.door_open_delay_s, door_close_s=service.door_close_s,
                 spread_s=service.spread_s, initial_kg=service.initial_kg, car_half_length_m=service.car_half_length_m,
-                slack_m=WHEEL_DRIVE_TRACK_SLACK_M if service.drive is not None else 0.0)
+                slack_m=WHEEL_DRIVE_TRACK_SLACK_M if service.drive is not None else 0.0, grades=grades)
 
 
 def _items(data: Dict, key: str, cls, path: Path) -> Tuple[Any, ...]:
@@ -232,9 +252,11 @@ def parse(data, vehicle: VehicleParams, path: Path) -> Service:
                                                f"{describe(data)}")
     check_keys(data, [f.name for f in dataclasses.fields(Service) if is_key(f)], path, ["service"])
     stations, curves = _items(data, "stations", StationSpec, path), _items(data, "curves", CurveSpec, path)
+    gradients = _items(data, "gradients", GradientSpec, path)
     half = 0.5 * (vehicle.bogie_centre_distance_m + vehicle.wheelbase_m)
-    rest = {k: v for k, v in data.items() if k not in ("stations", "curves")}
-    service = build(Service, rest, path, ["service"], stations=stations, curves=curves, car_half_length_m=half)
+    rest = {k: v for k, v in data.items() if k not in ("stations", "curves", "gradients")}
+    service = build(Service, rest, path, ["service"], stations=stations, curves=curves, gradients=gradients,
+                    car_half_length_m=half)
     check_doors(service, path, "service")
     if service.valve_settings is not None:
         check_valve_settings(service.valve_settings, path, ["service", "valve_settings"])
@@ -278,6 +300,7 @@ def parse(data, vehicle: VehicleParams, path: Path) -> Service:
             raise ScenarioError(path, [*where, "at_m"], f"the curve ends at {end:g} m, beyond the last station "
                                                         f"({line_m:g} m)")
         spans.append(end)
+    _check_gradients(gradients, line_m, half, path)
     shortest = min(run_time_s(b.at_m - a.at_m, service.line_speed_m_per_s, service.acceleration_m_per_s2,
                               service.braking_m_per_s2) for a, b in zip(stations, stations[1:]))
     if not service.spread_s < shortest:
@@ -285,6 +308,29 @@ def parse(data, vehicle: VehicleParams, path: Path) -> Service:
                                                            f"less than the shortest run ({shortest:.1f} s), got "
                                                            f"{service.spread_s:g} s")
     return service
+
+
+def _check_gradients(gradients: Tuple[GradientSpec, ...], line_m: float, half_m: float, path: Path) -> None:
+    """The gradients in order along the line, apart, within it, each long enough for its two
+    vertical curves, and the first station level under the whole car (it starts there at its
+    static equilibrium on level track)."""
+    end = -math.inf
+    for i, g in enumerate(gradients):
+        where = ["service", f"gradients[{i}]"]
+        if g.at_m < end:
+            raise ScenarioError(path, [*where, "at_m"], f"expected the gradients in order along the line, each after "
+                                                        f"the one before (it ends at {end:g} m); got {g.at_m:g} m")
+        if g.at_m < half_m + 1.0:
+            raise ScenarioError(path, [*where, "at_m"], f"the car starts at the first station on level track: expected "
+                                                        f"the gradient to begin at least {half_m + 1.0:g} m along the "
+                                                        f"line (half a car and a metre), got {g.at_m:g} m")
+        if g.at_m + g.length_m > line_m:
+            raise ScenarioError(path, [*where, "length_m"], f"the gradient ends at {g.at_m + g.length_m:g} m, beyond "
+                                                            f"the last station ({line_m:g} m)")
+        if 2.0 * g.transition_m > g.length_m:
+            raise ScenarioError(path, [*where, "transition_m"], f"two vertical curves of {g.transition_m:g} m do not "
+                                                                f"fit in the section of {g.length_m:g} m")
+        end = g.at_m + g.length_m
 
 
 def with_payload(service: Service, payload, path: Path) -> Service:
@@ -368,7 +414,7 @@ def make_car(scenario: Scenario):
                                                     contact=service.drive.contact_params(), start_s_m=route.offset_m)
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
                     spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
-                    track=route.track, speed_profile=route.speed, payload=payload, **drive)
+                    track=route.track, speed_profile=route.speed, payload=payload, grade=route.grade, **drive)
 
 
 def air_per_stop_kg(sample) -> np.ndarray:

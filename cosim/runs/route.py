@@ -25,7 +25,7 @@ from __future__ import annotations
 import bisect
 import math
 from dataclasses import dataclass
-from typing import List, Sequence, Tuple
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -124,6 +124,48 @@ class Plan:
     #: the payload on each patch of :data:`PATCHES` at the knot times (piecewise linear between)
     knots_s: Tuple[float, ...]
     patch_kg: Tuple[Tuple[float, ...], ...]
+    #: the grade under the car centre at a track arc length (None: a level line)
+    grade: Optional[RouteGrade] = None
+
+
+@dataclass(frozen=True)
+class LineGrade:
+    """A gradient as the route gives it: a section of the line from ``at_m`` over ``length_m``
+    [m] at ``grade`` (rise over run as run outwards, > 0 rising), reached and left over
+    ``transition_m`` at each end, the grade changing linearly there (a vertical curve of radius
+    transition_m / grade)."""
+
+    at_m: float
+    length_m: float
+    grade: float
+    transition_m: float
+
+    def at(self, x_m: float) -> float:
+        """The grade of this section at line position ``x_m`` (0 outside it)."""
+        u = min(x_m - self.at_m, self.at_m + self.length_m - x_m)
+        if u <= 0.0:
+            return 0.0
+        return self.grade if u >= self.transition_m else self.grade * u / self.transition_m
+
+
+@dataclass(frozen=True)
+class RouteGrade:
+    """The grade under the car centre at a track arc length (:class:`~vehicle.car.MetroCar`'s
+    ``grade``): the sections' at the line position, and on a round trip's way back (beyond the
+    terminus) the way out's mirrored and negated: what rose falls. Picklable (it travels with the
+    car's factory)."""
+
+    sections: Tuple[LineGrade, ...]
+    offset_m: float
+    line_m: float
+    round_trip: bool
+
+    def __call__(self, s_m: float) -> float:
+        x = s_m - self.offset_m
+        sign = 1.0
+        if self.round_trip and x > self.line_m:
+            x, sign = 2.0 * self.line_m - x, -1.0
+        return sign * sum(g.at(x) for g in self.sections)
 
 
 def run_phases(distance_m: float, line_speed: float, accel: float, brake: float) -> List[Tuple[float, float]]:
@@ -161,7 +203,8 @@ def _track(curves: Sequence[LineCurve], offset_m: float, length_m: float) -> Tra
 
 def plan(stations: Sequence[LineStation], curves: Sequence[LineCurve], *, round_trip: bool, line_speed_m_per_s: float,
          acceleration_m_per_s2: float, braking_m_per_s2: float, door_open_delay_s: float, door_close_s: float,
-         spread_s: float, initial_kg: float, car_half_length_m: float, slack_m: float = 0.0) -> Plan:
+         spread_s: float, initial_kg: float, car_half_length_m: float, slack_m: float = 0.0,
+         grades: Sequence[LineGrade] = ()) -> Plan:
     """The route as the car runs it (module docstring). ``car_half_length_m``: from the car centre
     to its front wheelset (the track starts that far plus ``slack_m`` behind the origin and ends
     that far plus 10 m beyond the last stop)."""
@@ -199,7 +242,8 @@ def plan(stations: Sequence[LineStation], curves: Sequence[LineCurve], *, round_
         speeds.append(0.0)
     speed = PhasedSpeedProfile(tuple(times), tuple(speeds))
     knots, patch = _payload_knots(stops, initial_kg, spread_s)
-    return Plan(tuple(stops), track, speed, offset, t, initial_kg, knots, patch)
+    grade = RouteGrade(tuple(grades), offset, line_m, round_trip) if grades else None
+    return Plan(tuple(stops), track, speed, offset, t, initial_kg, knots, patch, grade)
 
 
 def _payload_knots(stops: Sequence[Stop], initial_kg: float, spread_s: float):

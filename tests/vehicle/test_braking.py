@@ -235,14 +235,19 @@ class ThroughWheels:
     frame_moment_N_m: tuple
 
 
-def level_1(p, a: float, k_bellow: float = K_BELLOW_N_PER_M, wheels: ThroughWheels | None = None) -> dict:
+def level_1(p, a: float, k_bellow: float = K_BELLOW_N_PER_M, wheels: ThroughWheels | None = None,
+            weight_g: float | None = None) -> dict:
     """Quasi-static equilibrium in the deformed geometry (module doc, "Level 1"): carbody pitch
     theta [rad], per-wheelset transfer dQ (4,) [N], the traction rod forces on the carbody (2,) [N]
     and the displacements (X, Z, theta) of carbody and bogie frames at acceleration ``a``; with
     ``wheels`` the car moved through its wheels (:class:`ThroughWheels`; 17 unknowns, with the
-    wheelsets' x displacements, also returned), else held by the guidance joints."""
+    wheelsets' x displacements, also returned), else held by the guidance joints. ``weight_g``:
+    the bodies' weights at this gravity instead of the parameters' (the springs' preloads, the
+    static reference, stay at the parameters' g): a car standing on a gradient, whose weight
+    tilts (vehicle/car/gradient.py)."""
     s = hand_symbols(p, k_bellow)
     g, M, mb, mw = s["g"], s["M"], s["mb"], s["mw"]
+    gw = g if weight_g is None else weight_g
     xb = (s["L"] / 2.0, -s["L"] / 2.0)
     H, V0 = s["hu"] - s["hl"], M * g / 4.0          # bellow height, static force per bellow
     w2 = s["w"] / 2.0
@@ -275,7 +280,7 @@ def level_1(p, a: float, k_bellow: float = K_BELLOW_N_PER_M, wheels: ThroughWhee
 
         for k in bodies:          # d'Alembert and gravity at the CoG
             m = M if k == "c" else mb
-            apply(k, np.array([-m * a, -m * g]), cog(k))
+            apply(k, np.array([-m * a, -m * gw]), cog(k))
         wheel_z_force, wheel_x_force = np.zeros(4), np.zeros(4)
         for i in range(2):
             J = _rot(0.5 * (tc + bodies[i][2]))      # mid-frame of carbody and frame i
@@ -310,7 +315,7 @@ def level_1(p, a: float, k_bellow: float = K_BELLOW_N_PER_M, wheels: ThroughWhee
                 if wheels is not None:      # the torque's reaction on the frame: a pure moment
                     moment[i] += wheels.frame_moment_N_m[j]
         res = [*force["c"], moment["c"], *force[0], moment[0], *force[1], moment[1],
-               *(hertz(Zw) + wheel_z_force - mw * g)]
+               *(hertz(Zw) + wheel_z_force - mw * gw)]
         if wheels is not None:
             # the wheelsets along x; all the x equations sum to (creep forces) - M_tot a, so with
             # creep forces that carry M_tot a one of them is redundant: traded for the gauge

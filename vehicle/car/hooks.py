@@ -26,6 +26,11 @@ class StepHooks:
         self._joint_x_m = [float(x) + track.path.x0_m for x in wheelset_x_m]
         #: track heading under wheelset 1 at the last step end [rad]
         self.heading_rad = 0.0
+        #: track heading at the car centre at the last step end [rad]
+        self.centre_heading_rad = 0.0
+        #: gravity's component along the track in the running direction [m/s^2] (a gradient;
+        #: set by the car before each step)
+        self.gravity_along_m_per_s2 = 0.0
         #: the car's speed at the last step end [m/s] (a speed profile that stops and starts, with
         #: kinematic guidance or driven through the wheels; otherwise its constant speed)
         self.speed_m_per_s = float(track.path.speed_m_per_s)
@@ -42,6 +47,8 @@ class StepHooks:
         path = self.track.path
         if isinstance(track_state, np.ndarray):
             track_state = track_state.tolist()
+        centre = track_state[4][2] if len(track_state) > 4 else 0.5 * (track_state[0][2] + track_state[3][2])
+        self.centre_heading_rad = centre
         if self._model.drive_vars is not None:
             (xi, rz), (x, y, psi, *_) = self._model.drive_vars, track_state[4]
             xi.SetValue(math.cos(psi) * (x - path.x0_m) + math.sin(psi) * y)
@@ -188,7 +195,8 @@ class ContactStepHooks(StepHooks):
         a_ref = (v1 - v0) / (t - t0) if t > t0 else 0.0
         along = wr.longitudinal_offsets(q, q_t, 1.0) - wr.longitudinal_offsets(q)   # exact: linear in h
         offset = float(np.mean(self.track.wheelset_offsets_m))
-        self.torques.set(mbs, a_ref, offset, float(np.mean(along)) - v0, self._payload_kg())
+        self.torques.set(mbs, a_ref, offset, float(np.mean(along)) - v0, self._payload_kg(),
+                         self.gravity_along_m_per_s2)
         spin = q_t[6::wr.m]                                 # each wheelset's spin rate [rad/s]
         self.torques.creepage = (along - wr.r0 * spin) / np.maximum(np.abs(along), SLIDE_SPEED_M_PER_S)
         if not profile.constant:  # the kept Jacobian's speed rule (.solver) follows the car

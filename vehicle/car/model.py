@@ -15,6 +15,7 @@ from ..params import ContactParams, VehicleParams
 from .bellows import BellowLaws
 from .build import build_model
 from .contact import contact_guidance
+from .gradient import Gradient
 from .hooks import step_hooks
 from .maxwell import MaxwellDampers
 from .options import CONTACT_NEWTON_REL_TOL, SPECTRAL_RADIUS, CarOptions
@@ -139,6 +140,10 @@ class MetroCar:
             at the rigid-contact height and roll of the table at that displacement (with the
             static Hertz approach), at rest laterally, the rest of the car at its static
             position. None = centred (the static equilibrium).
+        grade: the line's gradient, ``grade(s_m) -> rise over run`` (> 0 rising in the running
+            direction) at the car centre's arc length, read before every internal step: every
+            body's weight is tilted by it (:mod:`.gradient`; the track stays in the horizontal
+            plane). None = level.
         options: the options grouped (:class:`~vehicle.car.options.CarOptions`), instead of the
             keywords.
     """
@@ -193,6 +198,11 @@ class MetroCar:
                                 self._pre_step, refresh_after_turn=model.contact_guidance)
         if self.maxwell.active:
             self.mbs.SetPostStepUserFunction(self.maxwell.post_step)
+        #: the line's gradient (:class:`~.gradient.Gradient`; None: level)
+        self.gradient = None
+        if run.grade is not None:
+            self.gradient = Gradient(self.mbs, run.grade, params.gravity_m_per_s2)
+            self.gradient.pre_step(self.mbs, self.path.centre_s_m(0.0), 0.0)
         #: the quantities the car reports (:class:`~.outputs.CarOutputs`)
         self.outputs = CarOutputs(self.mbs, self.model, params, static, self.track_input, self.contact,
                                   self.solver, flexible)
@@ -314,7 +324,12 @@ class MetroCar:
             solver.keep_jacobian()
         if self.maxwell.active:
             self.maxwell.set_step_size(mbs, t)
+        if self.gradient is not None:   # at the car centre's place on the profile
+            s_centre = self.path.centre_s_m(t)
+            hooks.gravity_along_m_per_s2 = self.gradient.along_track_m_per_s2(s_centre)
         ok = hooks.pre_step(mbs, t)
+        if self.gradient is not None:   # the heading there, as the hooks found it
+            self.gradient.pre_step(mbs, s_centre, hooks.centre_heading_rad)
         if self.payload is not None:
             self.payload.pre_step(mbs, self.model.carbody, t)
         solver.heading_rad = hooks.heading_rad

@@ -88,7 +88,8 @@ class ModelOptions:
 @dataclass(frozen=True)
 class RunSettings:
     """How the car runs: along which track, how fast, from where, what the rails under it
-    do (prescribed heights, irregularities) and what its floor carries (``payload``)."""
+    do (prescribed heights, irregularities), what its floor carries (``payload``) and the line's
+    gradient (``grade``)."""
 
     track: TrackGeometry | None = None
     speed_m_per_s: float = 0.0
@@ -98,8 +99,11 @@ class RunSettings:
     rail_height_m: Callable[[float], np.ndarray] | None = None
     irregularity: Callable[[np.ndarray], tuple] | None = None
     payload: Callable[[float], Sequence[PayloadBlock]] | None = None
+    grade: Callable[[float], float] | None = None
 
     def __post_init__(self):
+        if self.grade is not None and not callable(self.grade):
+            raise ValueError("grade must be callable: grade(s_m) -> rise over run at the car centre's arc length")
         if self.payload is not None and not callable(self.payload):
             raise ValueError("payload must be callable: payload(t_s) -> payload blocks (vehicle.payload.PayloadBlock)")
         if self.irregularity is not None and not callable(self.irregularity):

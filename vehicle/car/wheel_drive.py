@@ -17,11 +17,14 @@ frame's own y axis (the axle's, to the frame's small pitch relative to the wheel
 driver follows the speed profile by feed-forward and by feedback on where the car is against the
 profile. The total force along the track is
 
-    F = M_e a_ref - M (omega^2 e + 2 zeta omega de/dt),    M_e = M + 4 I_s / r0^2,
+    F = M_e a_ref - M g_t - M (omega^2 e + 2 zeta omega de/dt),    M_e = M + 4 I_s / r0^2,
 
 where:
 
 * a_ref is the profile's mean acceleration over the step, (v(t) - v(t0)) / (t - t0);
+* on a gradient (:mod:`.gradient`) the driver also knows the line: - M g_t is added, g_t
+  gravity's component along the track (< 0 uphill) on the translating mass (the spins feel
+  none);
 * M is the translating mass (carbody with its payload at the step's start, two bogie frames, four
   wheelsets);
 * I_s is a wheelset's spin inertia and r0 the centred rolling radius;
@@ -132,22 +135,26 @@ class WheelTorques:
                        for b in bogies]
         return cls(drive, spin_loads, bogie_loads, r0_m, spin_inertia_kg_m2, tare_mass_kg)
 
-    def force(self, a_ref: float, offset_m: float, rate_m_per_s: float, payload_kg: float) -> float:
-        """The total force along the track [N] for the profile's acceleration ``a_ref`` [m/s^2]
-        and the car's mean offset from the profile and its rate (module doc)."""
+    def force(self, a_ref: float, offset_m: float, rate_m_per_s: float, payload_kg: float,
+              gravity_along_m_per_s2: float = 0.0) -> float:
+        """The total force along the track [N] for the profile's acceleration ``a_ref`` [m/s^2],
+        the car's mean offset from the profile and its rate, and gravity's component along the
+        track (module doc)."""
         mass = self._tare_mass_kg + payload_kg
         effective = mass + 4.0 * self._spin_inertia / (self.r0_m * self.r0_m)
         zeta, omega = self.drive.tracking_damping_ratio, self._omega
-        return effective * a_ref - mass * (omega * omega * offset_m + 2.0 * zeta * omega * rate_m_per_s)
+        return (effective * a_ref - mass * gravity_along_m_per_s2
+                - mass * (omega * omega * offset_m + 2.0 * zeta * omega * rate_m_per_s))
 
     def shares(self, force_N: float) -> np.ndarray:
         """Each wheelset's share of ``force_N`` [N]: traction on the motored ones, braking on all."""
         return force_N * (self._motored if force_N >= 0.0 else np.full(4, 0.25))
 
-    def set(self, mbs, a_ref: float, offset_m: float, rate_m_per_s: float, payload_kg: float) -> None:
+    def set(self, mbs, a_ref: float, offset_m: float, rate_m_per_s: float, payload_kg: float,
+            gravity_along_m_per_s2: float = 0.0) -> None:
         """Set the torques for the coming step."""
         self.offset_m, self.offset_rate_m_per_s = offset_m, rate_m_per_s
-        self.force_N = self.force(a_ref, offset_m, rate_m_per_s, payload_kg)
+        self.force_N = self.force(a_ref, offset_m, rate_m_per_s, payload_kg, gravity_along_m_per_s2)
         torques = self.r0_m * self.shares(self.force_N)
         self.torques_N_m = torques
         for load, torque in zip(self._spin_loads, torques.tolist()):
