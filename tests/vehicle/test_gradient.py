@@ -10,8 +10,8 @@ import math
 import exudyn as exu
 import numpy as np
 import pytest
-
 from test_braking import hand_symbols, level_1
+
 from vehicle.car import MetroCar, WheelDrive
 from vehicle.params import ContactParams, metro_car_arb_dampers
 from vehicle.speed import PhasedSpeedProfile
