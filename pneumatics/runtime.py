@@ -27,13 +27,57 @@ from .chamber import (
     temperature_rate_K_per_s,
     upstream_enthalpy_flow_W,
 )
+from .compiled import arrays
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
 from .heat_transfer import bellow_surface, wall_conductance_W_per_K
 from .orifice import orifice_flow_kg_per_s
 from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
-from .valve_signals import lever_chain, set_at_rest, signal_rates
+from .valve_signals import CompiledSignals, set_at_rest
 from .valves import differential_valve_flow_kg_per_s, lever_conductance
+
+
+@arrays
+def node_states(m, T, V, p_bnd, T_bnd, R):
+    """(p, T, rho) of every node (chambers, then boundary nodes) x cases: a chamber's p = m R T / V
+    (eq. 3), a boundary node's given; rho = p / (R T). The numpy expressions' operations in their
+    order (compiled, :mod:`pneumatics.compiled`: one call instead of six numpy operations)."""
+    nc, n = m.shape
+    nb = p_bnd.shape[0]
+    p_n, T_n = np.empty((nc + nb, n)), np.empty((nc + nb, n))
+    for i in range(nc):
+        for j in range(n):
+            p_n[i, j] = m[i, j] * R * T[i, j] / V[i, j]
+            T_n[i, j] = T[i, j]
+    for i in range(nb):
+        for j in range(n):
+            p_n[nc + i, j] = p_bnd[i, j]
+            T_n[nc + i, j] = T_bnd[i, j]
+    rho_n = np.empty((nc + nb, n))
+    for i in range(nc + nb):
+        for j in range(n):
+            rho_n[i, j] = p_n[i, j] / (R * T_n[i, j])
+    return p_n, T_n, rho_n
+
+
+@arrays
+def physical_columns(x2, n_chamber_rows, q0, q1, s0, s1):
+    """(cases,) True where rows [0, n_chamber_rows) (masses, temperatures) are finite and > 0 and
+    rows [q0, q1) and [s0, s1) finite (compiled, :meth:`CircuitRuntime.physical_cases`)."""
+    n = x2.shape[1]
+    ok = np.ones(n, dtype=np.bool_)
+    for j in range(n):
+        for i in range(n_chamber_rows):
+            v = x2[i, j]
+            if not (v > 0.0 and np.isfinite(v)):
+                ok[j] = False
+        for i in range(q0, q1):
+            if not np.isfinite(x2[i, j]):
+                ok[j] = False
+        for i in range(s0, s1):
+            if not np.isfinite(x2[i, j]):
+                ok[j] = False
+    return ok
 
 
 class ValveSides(NamedTuple):
@@ -127,6 +171,8 @@ class CircuitRuntime:
         self._bellow_m_rows, self._bellow_T_rows = rows[self.layout.m][idx], rows[self.layout.T][idx]
         #: each case's polytropic index of the bellows' stiffness: gamma, 1 where isothermal
         self._polytropic_index = np.where(self._heat.isothermal_of(self._chambers.bellow_chamber), 1.0, self.gas.gamma)
+        #: the valves' signal laws compiled (None without valve dynamics)
+        self._signals = CompiledSignals(self._dynamics) if self._dynamics.present else None
 
     # ----------------------------------------------------------------------------- state
     def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
@@ -199,7 +245,7 @@ class CircuitRuntime:
         u = self._valves.lever @ z2
         if not self._dynamics.present:
             return u, u, u, u
-        return lever_chain(self._dynamics, u, x2[self.layout.valve_signal])
+        return self._signals.lever_chain(u, x2[self.layout.valve_signal])
 
     def _evaluate(self, x2: np.ndarray, z2: np.ndarray):
         """Pressures, volumes and link flows for a 2-D state (states x cases) and crushing (bellows
@@ -207,11 +253,11 @@ class CircuitRuntime:
         gas, lay, chambers, links = self.gas, self.layout, self._chambers, self._links
         m, T = x2[lay.m], x2[lay.T]
         V = chambers.V0_m3 - chambers.Ez_m2 @ z2
-        p = m * gas.R_J_per_kgK * T / V                                          # eq. (3)
         n_cases = x2.shape[1]
         p_bnd, T_bnd, C_fixed = self._boundary(n_cases)
-        p_n, T_n = np.concatenate([p, p_bnd]), np.concatenate([T, T_bnd])
-        rho_n = p_n / (gas.R_J_per_kgK * T_n)
+        # eq. (3) and the nodes' states: the chambers', then the boundary nodes'
+        p_n, T_n, rho_n = node_states(m, T, V, p_bnd, T_bnd, gas.R_J_per_kgK)
+        p = p_n[:len(m)]
         a, b = links.a, links.b
         w = np.empty((len(a), n_cases))
         w[self._pipes.links] = x2[lay.q]
@@ -453,7 +499,7 @@ class CircuitRuntime:
         dx[lay.heat_in] = np.add.reduce(Qdot, axis=0)        # Qdot.sum(axis=0), without its wrappers
         dx[lay.work_in] = -np.add.reduce(p * Vdot, axis=0)
         if self._dynamics.present:
-            dx[lay.valve_signal] = signal_rates(self._dynamics, x2[lay.valve_signal], chain, self._valves.lever_play, zdot2)
+            dx[lay.valve_signal] = self._signals.signal_rates(x2[lay.valve_signal], chain, self._valves.lever_play @ zdot2)
 
     def heat_conductances_W_per_K(self, x, z_m) -> np.ndarray:
         """Each chamber's k [W/K] at state ``x`` and crushing ``z_m``, (chambers, cases): its case's,
@@ -684,12 +730,10 @@ class CircuitRuntime:
 
     def physical_cases(self, x) -> np.ndarray:
         """(cases,) True where :meth:`check_state` would pass: finite positive masses and
-        temperatures, finite pipe flows and valve signals (one vectorised test over every case)."""
+        temperatures, finite pipe flows and valve signals (one compiled pass over every case)."""
         lay = self.layout
         x2 = x.reshape(lay.size, -1)
-        chambers = x2[:lay.T.stop]                    # masses then temperatures
-        ok = np.all(chambers > 0.0, axis=0) & np.all(np.isfinite(chambers), axis=0)
-        return ok & np.all(np.isfinite(x2[lay.q]), axis=0) & np.all(np.isfinite(x2[lay.valve_signal]), axis=0)
+        return physical_columns(x2, lay.T.stop, lay.q.start, lay.q.stop, lay.valve_signal.start, lay.valve_signal.stop)
 
     def check_state(self, x, t_s: float) -> None:
         """Raise :class:`CircuitDiverged` naming the component if a state is non-finite or non-physical."""
