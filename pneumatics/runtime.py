@@ -30,6 +30,7 @@ from .chamber import (
 from .compiled import arrays
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
+from .fused import fused_laws
 from .heat_transfer import bellow_surface, wall_conductance_W_per_K
 from .orifice import orifice_flow_kg_per_s
 from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
@@ -173,6 +174,9 @@ class CircuitRuntime:
         self._polytropic_index = np.where(self._heat.isothermal_of(self._chambers.bellow_chamber), 1.0, self.gas.gamma)
         #: the valves' signal laws compiled (None without valve dynamics)
         self._signals = CompiledSignals(self._dynamics) if self._dynamics.present else None
+        #: the evaluation fused into compiled calls (:mod:`pneumatics.fused`; None: the numpy one)
+        self._fused = fused_laws(self)
+        self._last_Hw = None          # (w, its links' enthalpy flows) of the last fused evaluation
 
     # ----------------------------------------------------------------------------- state
     def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
@@ -252,9 +256,11 @@ class CircuitRuntime:
         x cases); also the valves' lever chain and their conductances (supply sides, then exhaust)."""
         gas, lay, chambers, links = self.gas, self.layout, self._chambers, self._links
         m, T = x2[lay.m], x2[lay.T]
-        V = chambers.V0_m3 - chambers.Ez_m2 @ z2
         n_cases = x2.shape[1]
         p_bnd, T_bnd, C_fixed = self._boundary(n_cases)
+        if self._fused is not None and n_cases:
+            return self._evaluate_fused(x2, z2, m, T, p_bnd, T_bnd, C_fixed)
+        V = chambers.V0_m3 - chambers.Ez_m2 @ z2
         # eq. (3) and the nodes' states: the chambers', then the boundary nodes'
         p_n, T_n, rho_n = node_states(m, T, V, p_bnd, T_bnd, gas.R_J_per_kgK)
         p = p_n[:len(m)]
@@ -295,6 +301,22 @@ class CircuitRuntime:
         if blocked is not None:                            # faults: links that carry nothing
             w[blocked] = 0.0
         return m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve
+
+    def _evaluate_fused(self, x2, z2, m, T, p_bnd, T_bnd, C_fixed):
+        """:meth:`_evaluate` by the fused laws (:mod:`pneumatics.fused`), the same numbers."""
+        chain = None
+        if self._n_valves:
+            if self._dynamics.present:
+                chain = self._valve_chain(x2, z2)
+                u_f = chain[3]
+            else:
+                u_f = self._valves.lever @ z2
+        else:
+            u_f = np.empty((0, x2.shape[1]))
+        V, p_n, T_n, rho_n, w, C, Hw = self._fused.evaluate(x2, self._chambers.Ez_m2 @ z2, u_f, p_bnd, T_bnd)
+        self._last_Hw = (w, Hw)
+        C_valve = C[self._orifices.n_fixed:] if self._n_orifice_rows else C_fixed
+        return m, T, V, p_n[:len(m)], p_n, T_n, rho_n, w, chain, C_valve
 
     def _valve_conductances(self, x2: np.ndarray, z2: np.ndarray, C_valve: np.ndarray):
         """Write the valves' conductances (supply sides, then exhaust) into ``C_valve`` and return
@@ -354,6 +376,8 @@ class CircuitRuntime:
         lay, links, pipes = self.layout, self._links, self._pipes
         m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = evaluated or self._evaluate(x2, z2)
         a, b = links.a, links.b
+        if self._fused is not None and x2.shape[1]:
+            return self._rates_fused(x2, m, T, p, p_n, T_n, rho_n, w, chain, C_valve)
         Hw = upstream_enthalpy_flow_W(w, T_n[a], T_n[b], self._cp)            # upstream total enthalpy
         mdot = links.incidence @ w                                              # eq. (1)
         Hdot = links.incidence @ Hw
@@ -384,6 +408,23 @@ class CircuitRuntime:
             dx[lay.compression_work] = np.concatenate([delivered * w_iso, delivered * w_ad])
         conductances = self._correlation_conductances(m, T, V, w, mdot, z2) if self._heat.correlations else None
         return dx, (m, T, p, mdot, Hdot, chain, conductances)
+
+    def _rates_fused(self, x2, m, T, p, p_n, T_n, rho_n, w, chain, C_valve):
+        """:meth:`_rates_at_crushing` by the fused laws (:mod:`pneumatics.fused`), the same numbers."""
+        links, air = self._links, self._air
+        last = self._last_Hw
+        Hw = last[1] if last is not None and last[0] is w else \
+            upstream_enthalpy_flow_W(w, T_n[links.a], T_n[links.b], self._cp)
+        mdot = links.incidence @ w                                              # eq. (1)
+        Hdot = links.incidence @ Hw
+        if air.n_compressors:
+            atm = self.atmosphere
+            w_iso, w_ad = compression_work_J_per_kg(p[air.reservoir], atm.p_Pa, atm.T_K, self.gas)
+        else:
+            w_iso = w_ad = np.empty((0, x2.shape[1]))
+        dx = self._fused.rates(x2, mdot, p_n, rho_n, w, C_valve, w_iso, w_ad)
+        dx[self.layout.enthalpy_in] = links.boundary_sign @ Hw
+        return dx, (m, T, p, mdot, Hdot, chain, None)
 
     def _correlation_conductances(self, m, T, V, w, mdot, z2) -> list:
         """k [W/K] of the chambers a correlation serves, (rows, cases) per group
@@ -478,6 +519,14 @@ class CircuitRuntime:
         m, T, p, mdot, Hdot, chain, conductances = terms
         cv = self._cv
         Vdot = self._minus_Ez @ zdot2
+        if self._fused is not None and x2.shape[1]:
+            Qdot, pV = self._fused.temperatures(dx, x2, p, mdot, Hdot, Vdot, self.atmosphere.T_K, cv)
+            dx[lay.heat_in] = np.add.reduce(Qdot, axis=0)
+            dx[lay.work_in] = -np.add.reduce(pV, axis=0)
+            if self._dynamics.present:
+                dx[lay.valve_signal] = self._signals.signal_rates(x2[lay.valve_signal], chain,
+                                                                  self._valves.lever_play @ zdot2)
+            return
         Qdot = heat_flow_into_W(heat.k_finite_W_per_K, T, self.atmosphere.T_K)   # eq. (8), physical sign
         if conductances is not None:                       # a correlation's k, at this state
             Qdot = np.array(np.broadcast_to(Qdot, T.shape))
