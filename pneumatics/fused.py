@@ -18,6 +18,7 @@ several), and the compression work's log and power (numpy's own implementations)
 """
 from __future__ import annotations
 
+import math
 from typing import Optional
 
 import numpy as np
@@ -56,7 +57,8 @@ def _flows(x2, EzZ, u_f, V0, R, cp, rho_ref, p_atm, p_bnd, T_bnd, nc, q0, nq,
     ``diff_xp``/``diff_fp``; ``valves``: (valve, orifice row of its side, side sign, table start,
     end) rows, the supply sides then the exhaust sides, each side's table group in the numpy
     evaluation's order; ``stuck``: (valve row) with ``stuck_lever``; ``orifices``: (link, a, b);
-    ``compressors``: (link, governor state row); ``demands``: (link, node)."""
+    ``compressors``: (link, governor state row, reservoir); ``demands``: (link, node). Also
+    whether a compressor works (:meth:`FusedLaws.evaluate`)."""
     n = x2.shape[1]
     nb = p_bnd.shape[0]
     n_nodes = nc + nb
@@ -124,7 +126,15 @@ def _flows(x2, EzZ, u_f, V0, R, cp, rho_ref, p_atm, p_bnd, T_bnd, nc, q0, nq,
     for i in range(link_a.size):
         for j in range(n):
             Hw[i, j] = _enthalpy(w[i, j], T_n[link_a[i], j], T_n[link_b[i], j], cp)
-    return V, p_n, T_n, rho_n, w, C, Hw
+    # the compressors' work: delivered x work per kg is +0 wherever nothing is delivered (w = +0)
+    # and the reservoir's pressure is finite (the work per kg is then finite and >= +0)
+    working = False
+    for k in range(compressors.shape[0]):
+        for j in range(n):
+            delivered = w[compressors[k, 0], j]
+            if not (delivered == 0.0 and math.copysign(1.0, delivered) > 0.0 and np.isfinite(p_n[compressors[k, 2], j])):
+                working = True
+    return V, p_n, T_n, rho_n, w, C, Hw, working
 
 
 @arrays
@@ -182,6 +192,52 @@ def _temperatures(dx, x2, p, mdot, Hdot, Vdot, k_finite, isothermal, T_atm, cv, 
                                                                              Vdot[i, j], cv)
             pV[i, j] = pc * Vdot[i, j]
     return Qdot, pV
+
+
+@arrays
+def _bellow_laws(x2, held, half, V, z, m_rows, T_rows, R, p_atm, A0, dA_dz, A0_b, dA_dz_b, V0, dV_dz, n_poly):
+    """Each bellow's force at ``x2`` and at ``x2 + half held`` (eq. 4) and its stiffness at ``x2``
+    (:func:`pneumatics.chamber.bellow_stiffness_N_per_m`), (bellows, cases), ``V`` the bellows'
+    volumes (V0 - Ez @ z); the areas (bellows, 1) as the forces take them (the chambers' A0,
+    dA/dz) and as the stiffness does (the bellows' columns, with their V0 and dV/dz), no area
+    tables."""
+    nb, n = z.shape
+    F, F_half, K = np.empty((nb, n)), np.empty((nb, n)), np.empty((nb, n))
+    for i in range(nb):
+        mr, tr = m_rows[i], T_rows[i]
+        for j in range(n):
+            A = A0[i, 0] + dA_dz[i, 0] * z[i, j]
+            p = x2[mr, j] * R * x2[tr, j] / V[i, j]
+            F[i, j] = A * (p - p_atm)
+            p_half = (x2[mr, j] + half * held[mr, j]) * R * (x2[tr, j] + half * held[tr, j]) / V[i, j]
+            F_half[i, j] = A * (p_half - p_atm)
+            V_z = V0[i, 0] - dV_dz[i, 0] * z[i, j]
+            A_b = A0_b[i, 0] + dA_dz_b[i, 0] * z[i, j]
+            K[i, j] = dA_dz_b[i, 0] * (p - p_atm) + A_b * n_poly[i, j] * p * dV_dz[i, 0] / V_z
+    return F, F_half, K
+
+
+@arrays
+def governors(x2, nc, reservoir, V0, R, cut_in, cut_out, governor0):
+    """The governors' next states (compressors, cases) and whether one switched (as numpy's
+    array_equal has it: a NaN state counts as switched): :func:`pneumatics.air_supply.governor`
+    at each reservoir's pressure m R T / V0 in state ``x2``."""
+    n = x2.shape[1]
+    new = np.empty((reservoir.size, n))
+    switched = False
+    for k in range(reservoir.size):
+        i = reservoir[k]
+        for j in range(n):
+            p = x2[i, j] * R * x2[nc + i, j] / V0[k, 0]
+            running = x2[governor0 + k, j]
+            if p <= cut_in[k, 0]:
+                running = 1.0
+            if p >= cut_out[k, 0]:
+                running = 0.0
+            new[k, j] = running
+            if not running == x2[governor0 + k, j]:
+                switched = True
+    return new, switched
 
 
 def _pairs(*columns) -> np.ndarray:
@@ -249,7 +305,8 @@ class FusedLaws:
             np.zeros((0, 3), np.int64)
         governor_rows = np.arange(lay.size)[lay.governor]
         compressor_links = _rows(air.compressor_links, nl)
-        compressors = _pairs(compressor_links, governor_rows) if compressor_links.size else np.zeros((0, 2), np.int64)
+        compressors = _pairs(compressor_links, governor_rows, np.asarray(air.reservoir, np.int64).reshape(-1)) \
+            if compressor_links.size else np.zeros((0, 3), np.int64)
         demand_links = _rows(air.demand_links, nl)
         demands = _pairs(demand_links, np.asarray(air.demand_node, np.int64)) if demand_links.size else \
             np.zeros((0, 2), np.int64)
@@ -281,7 +338,9 @@ class FusedLaws:
         self._runtime_heat = a.heat
 
     def evaluate(self, x2: np.ndarray, EzZ: np.ndarray, u_f: np.ndarray, p_bnd: np.ndarray, T_bnd: np.ndarray):
-        """(V, p_n, T_n, rho_n, w, C, Hw): :func:`_flows`."""
+        """(V, p_n, T_n, rho_n, w, C, Hw, working): :func:`_flows`; ``working``: a compressor
+        delivers (or its reservoir's pressure is not finite), else the compression work's rates
+        are +0 whatever the work per kg (:meth:`CircuitRuntime._rates_fused` skips it)."""
         R, cp, rho_ref = self._flow_args[1:4]
         V0, p_atm = self._flow_args[0], self._flow_args[4]
         return _flows(x2, EzZ, u_f, V0, R, cp, rho_ref, p_atm, p_bnd, T_bnd, *self._flow_tail, self._fixed_C,
@@ -301,6 +360,29 @@ class FusedLaws:
             heat = self._heat[n] = (np.ascontiguousarray(np.broadcast_to(h.k_finite_W_per_K, (self.nc, n)), dtype=float),
                                     np.ascontiguousarray(np.broadcast_to(h.isothermal, (self.nc, n)), dtype=np.bool_))
         return _temperatures(dx, x2, p, mdot, Hdot, Vdot, heat[0], heat[1], T_atm, cv, self.nc)
+
+
+class FusedBellows:
+    """The bellows' force laws of ``runtime`` compiled (:func:`_bellow_laws`), for bellows
+    without area tables."""
+
+    def __init__(self, runtime):
+        chambers = runtime._chambers
+        b = chambers.bellow_columns
+        col = (lambda v: np.ascontiguousarray(np.broadcast_to(v, (len(runtime.bellow_names), 1)), dtype=float))
+        self._rows = (np.asarray(runtime._bellow_m_rows, np.int64), np.asarray(runtime._bellow_T_rows, np.int64),
+                      runtime.gas.R_J_per_kgK, float(runtime.atmosphere.p_Pa), col(chambers.A0_m2), col(chambers.dA_dz_m),
+                      col(b.A0_m2), col(b.dA_dz_m), col(b.V0_m3), col(b.dV_dz_m2))
+        self._index = runtime._polytropic_index
+        self._n_poly = {}                    # n_cases -> the polytropic index (bellows, cases)
+
+    def laws(self, x2, held2, half: float, V, z2):
+        """(F(x), F(x + half held), dF/dz(x)), each (bellows, cases)."""
+        n = x2.shape[1]
+        n_poly = self._n_poly.get(n)
+        if n_poly is None:
+            n_poly = self._n_poly[n] = np.ascontiguousarray(np.broadcast_to(self._index, z2.shape), dtype=float)
+        return _bellow_laws(x2, held2, half, V, z2, *self._rows, n_poly)
 
 
 def fused_laws(runtime) -> Optional[FusedLaws]:

@@ -30,7 +30,7 @@ from .chamber import (
 from .compiled import arrays
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
-from .fused import fused_laws
+from .fused import FusedBellows, fused_laws, governors
 from .heat_transfer import bellow_surface, wall_conductance_W_per_K
 from .orifice import orifice_flow_kg_per_s
 from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
@@ -176,7 +176,11 @@ class CircuitRuntime:
         self._signals = CompiledSignals(self._dynamics) if self._dynamics.present else None
         #: the evaluation fused into compiled calls (:mod:`pneumatics.fused`; None: the numpy one)
         self._fused = fused_laws(self)
-        self._last_Hw = None          # (w, its links' enthalpy flows) of the last fused evaluation
+        #: the bellows' force laws compiled (None: with area tables, the numpy ones)
+        self._fused_bellows = FusedBellows(self) if self._n_bellows and not self._chambers.area_tables else None
+        self._reservoirs = np.asarray(self._air.reservoir, dtype=np.int64).reshape(-1)
+        self._reservoir_V0 = np.ascontiguousarray(self._chambers.V0_m3[self._reservoirs], dtype=float).reshape(-1, 1)
+        self._last_Hw = None          # (w, its links' enthalpy flows, a compressor works) of the last fused evaluation
 
     # ----------------------------------------------------------------------------- state
     def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
@@ -313,8 +317,8 @@ class CircuitRuntime:
                 u_f = self._valves.lever @ z2
         else:
             u_f = np.empty((0, x2.shape[1]))
-        V, p_n, T_n, rho_n, w, C, Hw = self._fused.evaluate(x2, self._chambers.Ez_m2 @ z2, u_f, p_bnd, T_bnd)
-        self._last_Hw = (w, Hw)
+        V, p_n, T_n, rho_n, w, C, Hw, working = self._fused.evaluate(x2, self._chambers.Ez_m2 @ z2, u_f, p_bnd, T_bnd)
+        self._last_Hw = (w, Hw, working)
         C_valve = C[self._orifices.n_fixed:] if self._n_orifice_rows else C_fixed
         return m, T, V, p_n[:len(m)], p_n, T_n, rho_n, w, chain, C_valve
 
@@ -413,15 +417,17 @@ class CircuitRuntime:
         """:meth:`_rates_at_crushing` by the fused laws (:mod:`pneumatics.fused`), the same numbers."""
         links, air = self._links, self._air
         last = self._last_Hw
-        Hw = last[1] if last is not None and last[0] is w else \
-            upstream_enthalpy_flow_W(w, T_n[links.a], T_n[links.b], self._cp)
+        if last is not None and last[0] is w:
+            _, Hw, working = last
+        else:
+            Hw, working = upstream_enthalpy_flow_W(w, T_n[links.a], T_n[links.b], self._cp), True
         mdot = links.incidence @ w                                              # eq. (1)
         Hdot = links.incidence @ Hw
-        if air.n_compressors:
+        if air.n_compressors and working:
             atm = self.atmosphere
             w_iso, w_ad = compression_work_J_per_kg(p[air.reservoir], atm.p_Pa, atm.T_K, self.gas)
-        else:
-            w_iso = w_ad = np.empty((0, x2.shape[1]))
+        else:                    # nothing delivered: the work's rates are +0 x (finite, >= 0) = +0
+            w_iso = w_ad = np.zeros((air.n_compressors, x2.shape[1]))
         dx = self._fused.rates(x2, mdot, p_n, rho_n, w, C_valve, w_iso, w_ad)
         dx[self.layout.enthalpy_in] = links.boundary_sign @ Hw
         return dx, (m, T, p, mdot, Hdot, chain, None)
@@ -621,6 +627,19 @@ class CircuitRuntime:
             return np.stack([self.components[b].area_m2(z2[i]) for i, b in enumerate(self.bellow_names)])
         return chambers.A0_m2 + chambers.dA_dz_m * z2
 
+    def bellow_force_laws(self, x, z_m, rate, dt_s: float):
+        """(:meth:`bellow_forces_N` at (x, z), at (x + dt_s rate, z), :meth:`bellow_stiffness_N_per_m`
+        at (x, z)): the co-simulation's force laws' parts, compiled (pneumatics.fused.FusedBellows)
+        in one call instead of three of ~8 numpy operations each, the same numbers."""
+        if self._fused_bellows is None:
+            return (self.bellow_forces_N(x, z_m), self.bellow_forces_N(x + dt_s * rate, z_m),
+                    self.bellow_stiffness_N_per_m(x, z_m))
+        z = np.asarray(z_m, float)
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z, x2)
+        V = self._bellow_V0 - self._bellow_Ez @ z2
+        return tuple(v.reshape(z.shape) for v in self._fused_bellows.laws(x2, rate.reshape(x2.shape), dt_s, V, z2))
+
     def bellow_stiffness_N_per_m(self, x, z_m) -> np.ndarray:
         """Instantaneous dF/dz of each bellow (air in the pipe cannot move instantly): adiabatic,
         or isothermal when its k = inf. The co-simulation master uses it to linearise the force over a step."""
@@ -719,10 +738,12 @@ class CircuitRuntime:
         circuit without compressors returns ``x`` itself."""
         if not self._air.n_compressors:
             return x
-        lay = self.layout
+        lay, air = self.layout, self._air
         x2 = x.reshape(lay.size, -1)
-        new = self._governors(x2, x2[lay.governor])
-        if np.array_equal(new, x2[lay.governor]):
+        # compiled (pneumatics.fused.governors): _governors and np.array_equal in one call
+        new, switched = governors(x2, lay.n_chambers, self._reservoirs, self._reservoir_V0, self.gas.R_J_per_kgK,
+                                  air.p_cut_in_Pa, air.p_cut_out_Pa, lay.governor.start)
+        if not switched:
             return x
         x = x.copy()
         x.reshape(lay.size, -1)[lay.governor] = new

@@ -366,14 +366,15 @@ class CoSimulation:
         circuit as that rate (:meth:`Circuit.derivatives_and_held`), bit for bit as a separate
         evaluation would give it."""
         c = self.circuit
-        F_now = c.bellow_forces_N(self.x, self.z)
         if self.coupling != "linearised":
+            F_now = c.bellow_forces_N(self.x, self.z)
             zero = np.zeros_like(F_now)
             return F_now, zero, zero, c.derivatives(self.x, self.z, self.zd)
         rate, held_rate = c.derivatives_and_held(self.x, self.z, self.zd, self._evaluation_now())
         half = 0.5 * self.H
-        dF_dt = (c.bellow_forces_N(self.x + half * held_rate, self.z) - F_now) / half
-        K = c.bellow_stiffness_N_per_m(self.x, self.z)
+        # F(x_n, z_n), F(x_n + H/2 held rate, z_n) and K_n in one call (Circuit.bellow_force_laws)
+        F_now, F_half, K = c.bellow_force_laws(self.x, self.z, held_rate, half)
+        dF_dt = (F_half - F_now) / half
         F_start = F_now if self._F_end is None else self._F_end
         F_rate = (F_now + self.H * dF_dt - F_start) / self.H
         return F_start, K, F_rate, rate

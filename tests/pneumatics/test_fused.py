@@ -112,3 +112,40 @@ def test_circuits_the_fused_evaluation_does_not_cover_keep_the_numpy_one():
     for model in ("compressible", "quasi_steady"):
         comps = {"FL": Bellow(p0_Pa=4.6e5), "tank": Tank(p0_Pa=4.6e5), "pipe": Pipe("FL", "tank", model=model)}
         assert fused_laws(Circuit(comps)) is None
+
+
+@pytest.mark.parametrize("n", [1, 2, 5])
+def test_the_compiled_governors_switch_as_the_numpy_ones(n):
+    """update_governors (compiled: pneumatics.fused.governors) against _governors and
+    np.array_equal: reservoirs around cut-in and cut-out, governors either way, NaN states."""
+    circuit = Circuit(service_like(), k_W_per_K=np.zeros(n))
+    lay, i = circuit.layout, circuit._air.reservoir
+    cut_in, cut_out = circuit._air.p_cut_in_Pa, circuit._air.p_cut_out_Pa
+    for trial in range(200):
+        x, _, _ = random_state(circuit, n, nan=trial % 9 == 8)
+        p = RNG.choice([cut_in[0, 0], cut_out[0, 0], 0.5 * (cut_in[0, 0] + cut_out[0, 0]), 7e5, 1.1e6], size=n)
+        x[lay.m][i] = p * circuit._chambers.V0_m3[i] / (circuit.gas.R_J_per_kgK * x[lay.T][i])
+        new = circuit._governors(x, x[lay.governor])
+        expected = x if np.array_equal(new, x[lay.governor]) else np.concatenate([x[:lay.governor.start], new,
+                                                                                 x[lay.governor.stop:]])
+        got = circuit.update_governors(x)
+        assert _same(got, expected) and (got is x) == (expected is x)
+
+
+@pytest.mark.parametrize("k", [[0.0, 100.0], [10.0, np.inf], [np.inf], [0.0, 1.0, 30.0, np.inf, 5.0]])
+@pytest.mark.parametrize("bellow", [Bellow(p0_Pa=4.6e5), Bellow(p0_Pa=4.6e5, dA_dz_m=0.05),
+                                    Bellow(p0_Pa=4.6e5, area_table_z_m=(-0.05, 0.0, 0.05),
+                                           area_table_m2=(0.1, 0.11, 0.115))])
+def test_the_compiled_bellow_force_laws_are_the_numpy_ones(k, bellow):
+    """Circuit.bellow_force_laws (pneumatics.fused.FusedBellows; the numpy calls themselves with
+    area tables) against bellow_forces_N at x and at x + dt rate and bellow_stiffness_N_per_m."""
+    comps = car_circuit(bellow, Tank(p0_Pa=4.6e5), Pipe("a", "b"), levelling=VALVE)
+    circuit = Circuit(comps, k_W_per_K=np.array(k))
+    assert (circuit._fused_bellows is None) == bool(bellow.area_table_z_m)
+    with np.errstate(all="ignore"):
+        for trial in range(30):
+            x, z, zd = random_state(circuit, len(k), nan=trial % 7 == 6)
+            rate = RNG.normal(scale=1e3, size=x.shape) * np.abs(x)
+            expected = (circuit.bellow_forces_N(x, z), circuit.bellow_forces_N(x + 0.0025 * rate, z),
+                        circuit.bellow_stiffness_N_per_m(x, z))
+            assert all(_same(a, b) for a, b in zip(circuit.bellow_force_laws(x, z, rate, 0.0025), expected))
