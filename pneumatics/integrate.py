@@ -18,7 +18,7 @@ from typing import Callable, Tuple
 import numpy as np
 
 from .circuit import Circuit
-from .compiled import arrays
+from .compiled import arrays, elementwise
 from .errors import CircuitError
 
 #: motion(t_s) -> (z_m, zdot_m_per_s), each shaped (bellows,) or (bellows, cases)
@@ -57,6 +57,18 @@ def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1):
         zd = _hermite_zd(dz, zd0, zd1, 6 * s - 6 * s2, H, 1 - 4 * s + 3 * s2, 3 * s2 - 2 * s)
         return z, zd
     return motion
+
+
+@elementwise(3)
+def _rk4_stage(x, c, k):
+    """x + c k: a stage's state (c = h/2 or h)."""
+    return x + c * k
+
+
+@elementwise(6)
+def _rk4_step(x, k1, k2, k3, k4, h6):
+    """x + h6 (k1 + 2 (k2 + k3) + k4): the step's new state (h6 = h/6)."""
+    return x + h6 * (k1 + 2.0 * (k2 + k3) + k4)
 
 
 #: RK4's step for the compressible pipes' fastest (undamped) wave, h omega_max with omega_max =
@@ -108,11 +120,13 @@ def rk4(f: Callable[[float, np.ndarray], np.ndarray], x: np.ndarray, t0_s: float
     h = (t1_s - t0_s) / n_steps
     t = t0_s
     for i in range(n_steps):
+        # the numpy expressions x + 0.5 h k1, ..., x + (h / 6) (k1 + 2 (k2 + k3) + k4), compiled
+        # (:mod:`pneumatics.compiled`: the same operations in the same order, one call each)
         k1 = rate0 if i == 0 and rate0 is not None else f(t, x)
-        k2 = f(t + 0.5 * h, x + 0.5 * h * k1)
-        k3 = f(t + 0.5 * h, x + 0.5 * h * k2)
-        k4 = f(t + h, x + h * k3)
-        x = x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+        k2 = f(t + 0.5 * h, _rk4_stage(x, 0.5 * h, k1))
+        k3 = f(t + 0.5 * h, _rk4_stage(x, 0.5 * h, k2))
+        k4 = f(t + h, _rk4_stage(x, h, k3))
+        x = _rk4_step(x, k1, k2, k3, k4, h / 6.0)
         if switch is not None:
             x = switch(x)
         t = t0_s + (i + 1) * h
@@ -122,9 +136,14 @@ def rk4(f: Callable[[float, np.ndarray], np.ndarray], x: np.ndarray, t0_s: float
 
 
 def circuit_rhs(circuit: Circuit, motion: Motion) -> Callable[[float, np.ndarray], np.ndarray]:
-    """dx/dt = f(t, x) of ``circuit`` driven by ``motion``."""
+    """dx/dt = f(t, x) of ``circuit`` driven by ``motion`` (evaluated once per time: RK4's second
+    and third stages share theirs)."""
+    last = [None, None]
+
     def f(t, x):
-        z, zd = motion(t)
+        if last[0] != t:
+            last[0], last[1] = t, motion(t)
+        z, zd = last[1]
         return circuit.derivatives(x, z, zd)
     return f
 

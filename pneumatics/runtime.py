@@ -27,13 +27,58 @@ from .chamber import (
     temperature_rate_K_per_s,
     upstream_enthalpy_flow_W,
 )
+from .compiled import arrays
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
+from .fused import FusedBellows, fused_laws, governors
 from .heat_transfer import bellow_surface, wall_conductance_W_per_K
 from .orifice import orifice_flow_kg_per_s
 from .pipe import pipe_flow_quasi_steady_kg_per_s, pipe_flow_rate_kg_per_s2
-from .valve_signals import lever_chain, set_at_rest, signal_rates
+from .valve_signals import CompiledSignals, set_at_rest
 from .valves import differential_valve_flow_kg_per_s, lever_conductance
+
+
+@arrays
+def node_states(m, T, V, p_bnd, T_bnd, R):
+    """(p, T, rho) of every node (chambers, then boundary nodes) x cases: a chamber's p = m R T / V
+    (eq. 3), a boundary node's given; rho = p / (R T). The numpy expressions' operations in their
+    order (compiled, :mod:`pneumatics.compiled`: one call instead of six numpy operations)."""
+    nc, n = m.shape
+    nb = p_bnd.shape[0]
+    p_n, T_n = np.empty((nc + nb, n)), np.empty((nc + nb, n))
+    for i in range(nc):
+        for j in range(n):
+            p_n[i, j] = m[i, j] * R * T[i, j] / V[i, j]
+            T_n[i, j] = T[i, j]
+    for i in range(nb):
+        for j in range(n):
+            p_n[nc + i, j] = p_bnd[i, j]
+            T_n[nc + i, j] = T_bnd[i, j]
+    rho_n = np.empty((nc + nb, n))
+    for i in range(nc + nb):
+        for j in range(n):
+            rho_n[i, j] = p_n[i, j] / (R * T_n[i, j])
+    return p_n, T_n, rho_n
+
+
+@arrays
+def physical_columns(x2, n_chamber_rows, q0, q1, s0, s1):
+    """(cases,) True where rows [0, n_chamber_rows) (masses, temperatures) are finite and > 0 and
+    rows [q0, q1) and [s0, s1) finite (compiled, :meth:`CircuitRuntime.physical_cases`)."""
+    n = x2.shape[1]
+    ok = np.ones(n, dtype=np.bool_)
+    for j in range(n):
+        for i in range(n_chamber_rows):
+            v = x2[i, j]
+            if not (v > 0.0 and np.isfinite(v)):
+                ok[j] = False
+        for i in range(q0, q1):
+            if not np.isfinite(x2[i, j]):
+                ok[j] = False
+        for i in range(s0, s1):
+            if not np.isfinite(x2[i, j]):
+                ok[j] = False
+    return ok
 
 
 class ValveSides(NamedTuple):
@@ -127,6 +172,15 @@ class CircuitRuntime:
         self._bellow_m_rows, self._bellow_T_rows = rows[self.layout.m][idx], rows[self.layout.T][idx]
         #: each case's polytropic index of the bellows' stiffness: gamma, 1 where isothermal
         self._polytropic_index = np.where(self._heat.isothermal_of(self._chambers.bellow_chamber), 1.0, self.gas.gamma)
+        #: the valves' signal laws compiled (None without valve dynamics)
+        self._signals = CompiledSignals(self._dynamics) if self._dynamics.present else None
+        #: the evaluation fused into compiled calls (:mod:`pneumatics.fused`; None: the numpy one)
+        self._fused = fused_laws(self)
+        #: the bellows' force laws compiled (None: with area tables, the numpy ones)
+        self._fused_bellows = FusedBellows(self) if self._n_bellows and not self._chambers.area_tables else None
+        self._reservoirs = np.asarray(self._air.reservoir, dtype=np.int64).reshape(-1)
+        self._reservoir_V0 = np.ascontiguousarray(self._chambers.V0_m3[self._reservoirs], dtype=float).reshape(-1, 1)
+        self._last_Hw = None          # (w, its links' enthalpy flows, a compressor works) of the last fused evaluation
 
     # ----------------------------------------------------------------------------- state
     def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
@@ -199,19 +253,21 @@ class CircuitRuntime:
         u = self._valves.lever @ z2
         if not self._dynamics.present:
             return u, u, u, u
-        return lever_chain(self._dynamics, u, x2[self.layout.valve_signal])
+        return self._signals.lever_chain(u, x2[self.layout.valve_signal])
 
     def _evaluate(self, x2: np.ndarray, z2: np.ndarray):
         """Pressures, volumes and link flows for a 2-D state (states x cases) and crushing (bellows
         x cases); also the valves' lever chain and their conductances (supply sides, then exhaust)."""
         gas, lay, chambers, links = self.gas, self.layout, self._chambers, self._links
         m, T = x2[lay.m], x2[lay.T]
-        V = chambers.V0_m3 - chambers.Ez_m2 @ z2
-        p = m * gas.R_J_per_kgK * T / V                                          # eq. (3)
         n_cases = x2.shape[1]
         p_bnd, T_bnd, C_fixed = self._boundary(n_cases)
-        p_n, T_n = np.concatenate([p, p_bnd]), np.concatenate([T, T_bnd])
-        rho_n = p_n / (gas.R_J_per_kgK * T_n)
+        if self._fused is not None and n_cases:
+            return self._evaluate_fused(x2, z2, m, T, p_bnd, T_bnd, C_fixed)
+        V = chambers.V0_m3 - chambers.Ez_m2 @ z2
+        # eq. (3) and the nodes' states: the chambers', then the boundary nodes'
+        p_n, T_n, rho_n = node_states(m, T, V, p_bnd, T_bnd, gas.R_J_per_kgK)
+        p = p_n[:len(m)]
         a, b = links.a, links.b
         w = np.empty((len(a), n_cases))
         w[self._pipes.links] = x2[lay.q]
@@ -249,6 +305,22 @@ class CircuitRuntime:
         if blocked is not None:                            # faults: links that carry nothing
             w[blocked] = 0.0
         return m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve
+
+    def _evaluate_fused(self, x2, z2, m, T, p_bnd, T_bnd, C_fixed):
+        """:meth:`_evaluate` by the fused laws (:mod:`pneumatics.fused`), the same numbers."""
+        chain = None
+        if self._n_valves:
+            if self._dynamics.present:
+                chain = self._valve_chain(x2, z2)
+                u_f = chain[3]
+            else:
+                u_f = self._valves.lever @ z2
+        else:
+            u_f = np.empty((0, x2.shape[1]))
+        V, p_n, T_n, rho_n, w, C, Hw, working = self._fused.evaluate(x2, self._chambers.Ez_m2 @ z2, u_f, p_bnd, T_bnd)
+        self._last_Hw = (w, Hw, working)
+        C_valve = C[self._orifices.n_fixed:] if self._n_orifice_rows else C_fixed
+        return m, T, V, p_n[:len(m)], p_n, T_n, rho_n, w, chain, C_valve
 
     def _valve_conductances(self, x2: np.ndarray, z2: np.ndarray, C_valve: np.ndarray):
         """Write the valves' conductances (supply sides, then exhaust) into ``C_valve`` and return
@@ -308,6 +380,8 @@ class CircuitRuntime:
         lay, links, pipes = self.layout, self._links, self._pipes
         m, T, V, p, p_n, T_n, rho_n, w, chain, C_valve = evaluated or self._evaluate(x2, z2)
         a, b = links.a, links.b
+        if self._fused is not None and x2.shape[1]:
+            return self._rates_fused(x2, m, T, p, p_n, T_n, rho_n, w, chain, C_valve)
         Hw = upstream_enthalpy_flow_W(w, T_n[a], T_n[b], self._cp)            # upstream total enthalpy
         mdot = links.incidence @ w                                              # eq. (1)
         Hdot = links.incidence @ Hw
@@ -338,6 +412,25 @@ class CircuitRuntime:
             dx[lay.compression_work] = np.concatenate([delivered * w_iso, delivered * w_ad])
         conductances = self._correlation_conductances(m, T, V, w, mdot, z2) if self._heat.correlations else None
         return dx, (m, T, p, mdot, Hdot, chain, conductances)
+
+    def _rates_fused(self, x2, m, T, p, p_n, T_n, rho_n, w, chain, C_valve):
+        """:meth:`_rates_at_crushing` by the fused laws (:mod:`pneumatics.fused`), the same numbers."""
+        links, air = self._links, self._air
+        last = self._last_Hw
+        if last is not None and last[0] is w:
+            _, Hw, working = last
+        else:
+            Hw, working = upstream_enthalpy_flow_W(w, T_n[links.a], T_n[links.b], self._cp), True
+        mdot = links.incidence @ w                                              # eq. (1)
+        Hdot = links.incidence @ Hw
+        if air.n_compressors and working:
+            atm = self.atmosphere
+            w_iso, w_ad = compression_work_J_per_kg(p[air.reservoir], atm.p_Pa, atm.T_K, self.gas)
+        else:                    # nothing delivered: the work's rates are +0 x (finite, >= 0) = +0
+            w_iso = w_ad = np.zeros((air.n_compressors, x2.shape[1]))
+        dx = self._fused.rates(x2, mdot, p_n, rho_n, w, C_valve, w_iso, w_ad)
+        dx[self.layout.enthalpy_in] = links.boundary_sign @ Hw
+        return dx, (m, T, p, mdot, Hdot, chain, None)
 
     def _correlation_conductances(self, m, T, V, w, mdot, z2) -> list:
         """k [W/K] of the chambers a correlation serves, (rows, cases) per group
@@ -432,6 +525,14 @@ class CircuitRuntime:
         m, T, p, mdot, Hdot, chain, conductances = terms
         cv = self._cv
         Vdot = self._minus_Ez @ zdot2
+        if self._fused is not None and x2.shape[1]:
+            Qdot, pV = self._fused.temperatures(dx, x2, p, mdot, Hdot, Vdot, self.atmosphere.T_K, cv)
+            dx[lay.heat_in] = np.add.reduce(Qdot, axis=0)
+            dx[lay.work_in] = -np.add.reduce(pV, axis=0)
+            if self._dynamics.present:
+                dx[lay.valve_signal] = self._signals.signal_rates(x2[lay.valve_signal], chain,
+                                                                  self._valves.lever_play @ zdot2)
+            return
         Qdot = heat_flow_into_W(heat.k_finite_W_per_K, T, self.atmosphere.T_K)   # eq. (8), physical sign
         if conductances is not None:                       # a correlation's k, at this state
             Qdot = np.array(np.broadcast_to(Qdot, T.shape))
@@ -453,7 +554,7 @@ class CircuitRuntime:
         dx[lay.heat_in] = np.add.reduce(Qdot, axis=0)        # Qdot.sum(axis=0), without its wrappers
         dx[lay.work_in] = -np.add.reduce(p * Vdot, axis=0)
         if self._dynamics.present:
-            dx[lay.valve_signal] = signal_rates(self._dynamics, x2[lay.valve_signal], chain, self._valves.lever_play, zdot2)
+            dx[lay.valve_signal] = self._signals.signal_rates(x2[lay.valve_signal], chain, self._valves.lever_play @ zdot2)
 
     def heat_conductances_W_per_K(self, x, z_m) -> np.ndarray:
         """Each chamber's k [W/K] at state ``x`` and crushing ``z_m``, (chambers, cases): its case's,
@@ -525,6 +626,19 @@ class CircuitRuntime:
         if chambers.area_tables:
             return np.stack([self.components[b].area_m2(z2[i]) for i, b in enumerate(self.bellow_names)])
         return chambers.A0_m2 + chambers.dA_dz_m * z2
+
+    def bellow_force_laws(self, x, z_m, rate, dt_s: float):
+        """(:meth:`bellow_forces_N` at (x, z), at (x + dt_s rate, z), :meth:`bellow_stiffness_N_per_m`
+        at (x, z)): the co-simulation's force laws' parts, compiled (pneumatics.fused.FusedBellows)
+        in one call instead of three of ~8 numpy operations each, the same numbers."""
+        if self._fused_bellows is None:
+            return (self.bellow_forces_N(x, z_m), self.bellow_forces_N(x + dt_s * rate, z_m),
+                    self.bellow_stiffness_N_per_m(x, z_m))
+        z = np.asarray(z_m, float)
+        x2 = x.reshape(self.layout.size, -1)
+        z2 = self._per_bellow(z, x2)
+        V = self._bellow_V0 - self._bellow_Ez @ z2
+        return tuple(v.reshape(z.shape) for v in self._fused_bellows.laws(x2, rate.reshape(x2.shape), dt_s, V, z2))
 
     def bellow_stiffness_N_per_m(self, x, z_m) -> np.ndarray:
         """Instantaneous dF/dz of each bellow (air in the pipe cannot move instantly): adiabatic,
@@ -624,10 +738,12 @@ class CircuitRuntime:
         circuit without compressors returns ``x`` itself."""
         if not self._air.n_compressors:
             return x
-        lay = self.layout
+        lay, air = self.layout, self._air
         x2 = x.reshape(lay.size, -1)
-        new = self._governors(x2, x2[lay.governor])
-        if np.array_equal(new, x2[lay.governor]):
+        # compiled (pneumatics.fused.governors): _governors and np.array_equal in one call
+        new, switched = governors(x2, lay.n_chambers, self._reservoirs, self._reservoir_V0, self.gas.R_J_per_kgK,
+                                  air.p_cut_in_Pa, air.p_cut_out_Pa, lay.governor.start)
+        if not switched:
             return x
         x = x.copy()
         x.reshape(lay.size, -1)[lay.governor] = new
@@ -684,12 +800,10 @@ class CircuitRuntime:
 
     def physical_cases(self, x) -> np.ndarray:
         """(cases,) True where :meth:`check_state` would pass: finite positive masses and
-        temperatures, finite pipe flows and valve signals (one vectorised test over every case)."""
+        temperatures, finite pipe flows and valve signals (one compiled pass over every case)."""
         lay = self.layout
         x2 = x.reshape(lay.size, -1)
-        chambers = x2[:lay.T.stop]                    # masses then temperatures
-        ok = np.all(chambers > 0.0, axis=0) & np.all(np.isfinite(chambers), axis=0)
-        return ok & np.all(np.isfinite(x2[lay.q]), axis=0) & np.all(np.isfinite(x2[lay.valve_signal]), axis=0)
+        return physical_columns(x2, lay.T.stop, lay.q.start, lay.q.stop, lay.valve_signal.start, lay.valve_signal.stop)
 
     def check_state(self, x, t_s: float) -> None:
         """Raise :class:`CircuitDiverged` naming the component if a state is non-finite or non-physical."""

@@ -18,7 +18,7 @@ from cosim.results.series import car_dataset, concat_cases
 from cosim.scenario.imported import is_imported
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import k_label
-from pneumatics.integrate import stable_step_s
+from pneumatics.integrate import advance, stable_step_s
 from pneumatics.layouts import static_pressures
 from vehicle.params import BELLOWS
 
@@ -111,7 +111,9 @@ def _load_compiled_laws(variants: Sequence[Scenario]) -> None:
     the laws loaded from the cache) in this process before it forks the pool: the workers inherit
     them instead of each loading them again, ~0.4 s of CPU per worker of the twist's main job.
     Only the laws the circuits call: loading all three took 0.57 s here. The evaluation's numbers
-    are thrown away; a law it did not reach compiles in the worker that calls it, as before."""
+    are thrown away; a law it did not reach compiles in the worker that calls it, as before. A
+    macro-step's other compiled calls (the bellows' force laws, RK4's combinations, the governors,
+    the divergence check) are made once too."""
     for scenario in variants:
         try:
             circuit = scenario.circuit.compile(np.asarray(scenario.k_W_per_K, dtype=float))
@@ -121,7 +123,12 @@ def _load_compiled_laws(variants: Sequence[Scenario]) -> None:
             every = [circuit.with_active_faults(range(len(circuit.faults)))] if circuit.faults else []
             with np.errstate(all="ignore"):
                 for c in (circuit, *every):
-                    c.derivatives(x, z, z)
+                    # what every macro-step calls: the force laws, RK4 (its stages' evaluations and
+                    # combinations, the governors), the divergence check
+                    c.derivatives_and_held(x, z, z)
+                    c.bellow_force_laws(x, z, x, 0.0)
+                    advance(c, x, 0.0, 1e-3, lambda t: (z, z), 1e-3)
+                    c.physical_cases(x)
         except Exception:                       # noqa: BLE001 -- only a head start: the workers compile what they need
             pass
 

@@ -333,7 +333,8 @@ class CoSimulation:
         watching = self.watch is not None and self._steps % self._watch_every == 0
         if self.watch is not None:                    # before the air sees an impossible crushing
             self._stop_impossible_cars(z1, t1, watching)
-            z1[:, ~self.active], zd1[:, ~self.active] = self.z[:, ~self.active], 0.0
+            if not self.active.all():
+                z1[:, ~self.active], zd1[:, ~self.active] = self.z[:, ~self.active], 0.0
         motion = hermite_motion(self.t, t1, self.z, self.zd, z1, zd1)
         with np.errstate(all="ignore"):               # a diverging column is diagnosed just below
             # the motion starts at (z_n, zd_n) exactly, so RK4's first stage is ``rate``
@@ -342,7 +343,8 @@ class CoSimulation:
         if watching:
             self._stop_impossible_air(x1, z1, t1)
         self._steps += 1
-        x1[:, ~self.active] = self.x[:, ~self.active]  # stopped cases stay frozen
+        if not self.active.all():
+            x1[:, ~self.active] = self.x[:, ~self.active]  # stopped cases stay frozen
         self._F_end = F_start + self.H * F_rate + K * (z1 - self.z)  # what the cars feel at t1
         self.x, self.t, self.z, self.zd = x1, t1, z1, zd1
         self._sampled = None
@@ -364,14 +366,15 @@ class CoSimulation:
         circuit as that rate (:meth:`Circuit.derivatives_and_held`), bit for bit as a separate
         evaluation would give it."""
         c = self.circuit
-        F_now = c.bellow_forces_N(self.x, self.z)
         if self.coupling != "linearised":
+            F_now = c.bellow_forces_N(self.x, self.z)
             zero = np.zeros_like(F_now)
             return F_now, zero, zero, c.derivatives(self.x, self.z, self.zd)
         rate, held_rate = c.derivatives_and_held(self.x, self.z, self.zd, self._evaluation_now())
         half = 0.5 * self.H
-        dF_dt = (c.bellow_forces_N(self.x + half * held_rate, self.z) - F_now) / half
-        K = c.bellow_stiffness_N_per_m(self.x, self.z)
+        # F(x_n, z_n), F(x_n + H/2 held rate, z_n) and K_n in one call (Circuit.bellow_force_laws)
+        F_now, F_half, K = c.bellow_force_laws(self.x, self.z, held_rate, half)
+        dF_dt = (F_half - F_now) / half
         F_start = F_now if self._F_end is None else self._F_end
         F_rate = (F_now + self.H * dF_dt - F_start) / self.H
         return F_start, K, F_rate, rate
@@ -404,7 +407,8 @@ class CoSimulation:
         """Stop every running case whose bellows are crushed flat or, with ``cars``, whose car
         is in a state no car can be in (:class:`~cosim.limits.watch.StateWatch`)."""
         fractions = self.circuit.bellow_volume_fractions(z1)
-        for j in np.flatnonzero(self.active):
+        running = self.active if cars else self.active & self.watch.any_flat(fractions)   # the others pass
+        for j in np.flatnonzero(running):
             reason = self.watch.bellows(fractions[:, j], self.circuit.bellow_names, t1) or \
                 (self.watch.car(j, self.cars[j], t1) if cars else None)
             if reason:

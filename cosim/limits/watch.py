@@ -58,6 +58,10 @@ class StateWatch:
                     f"(longer than {lim.wheelset_lift_s:g} s) at t = {t_s:.4g} s: derailed")
         return None
 
+    def any_flat(self, volume_fractions: np.ndarray) -> np.ndarray:
+        """Per case (the last axis), whether :meth:`bellows` would name a bellow."""
+        return np.any(volume_fractions < self.limits.bellow_volume_fraction, axis=0)
+
     def bellows(self, volume_fractions: np.ndarray, names: Sequence[str], t_s: float) -> Optional[str]:
         """Why a bellow is crushed flat (``volume_fractions``: each bellow's volume over its
         nominal one), or None."""

@@ -167,3 +167,74 @@ def test_a_law_compiles_without_the_cache_when_a_source_changed_or_the_cache_is_
         assert compiled._compiled(law, make)(2.0, 3.0) == 7.0
     assert made == [False, True, False]
     assert law.__qualname__.endswith(compiled._DIGEST)
+
+
+def _same(a, b) -> bool:
+    return a.shape == b.shape and a.dtype == b.dtype and a.tobytes() == b.tobytes()
+
+
+@pytest.mark.parametrize("valves", [
+    [dict(hysteresis_m=0.002, delay_s=1.0, lag_s=1.0)] * 4,                        # the service's valves
+    [dict(hysteresis_m=0.002), dict(delay_s=0.5), dict(lag_s=0.3), {}, dict(hysteresis_m=0.004, delay_s=0.2, lag_s=2.0)],
+    [dict(delay_s=1.0)] * 2,
+])
+def test_the_valve_signal_laws_are_the_numpy_laws_bit_for_bit(valves):
+    """The levelling valves' lever chain (play, delay, lag) and its states' rates, compiled
+    (pneumatics.valve_signals.CompiledSignals) against lever_chain and signal_rates: random
+    signals, states on the play's edges, NaN states, zero crushing rates, 1 to 5 cases."""
+    from pneumatics.assembly.valve_dynamics import compile_valve_dynamics
+    from pneumatics.valve_signals import CompiledSignals, lever_chain, signal_rates
+    from pneumatics.valves import LevellingValve
+
+    dyn = compile_valve_dynamics([LevellingValve("FL", **v) for v in valves])
+    compiled = CompiledSignals(dyn)
+    lever_play = RNG.normal(size=(dyn.n_play, 4))
+    for cases in (1, 2, 5):
+        for trial in range(60):
+            u = RNG.normal(scale=3e-3, size=(len(valves), cases))
+            s = RNG.normal(scale=3e-3, size=(dyn.n_states, cases))
+            zdot = RNG.normal(scale=1e-2, size=(4, cases))
+            if trial % 5 == 0:
+                s[dyn.play] = u[dyn.play_rows] - dyn.play_half_m     # pressing on the play's edge
+            if trial % 7 == 0:
+                s[RNG.integers(dyn.n_states)] = np.nan
+                zdot[RNG.integers(4)] = 0.0
+            expected, got = lever_chain(dyn, u, s), compiled.lever_chain(u, s)
+            assert all(_same(a, b) for a, b in zip(expected, got))
+            assert _same(signal_rates(dyn, s, expected, lever_play, zdot), compiled.signal_rates(s, got, lever_play @ zdot))
+
+
+def test_the_node_states_and_the_physical_check_are_the_numpy_expressions():
+    """Eq. (3) over the chambers with the boundary nodes after them, and the densities (compiled
+    node_states), bit for bit; physical_columns as the numpy test (NaN, inf, zero, negative)."""
+    from pneumatics.runtime import node_states, physical_columns
+
+    for cases in (1, 2, 7):
+        m, T = RNG.uniform(1e-3, 1.0, (9, cases)), RNG.uniform(250.0, 350.0, (9, cases))
+        V, p_bnd, T_bnd = RNG.uniform(1e-3, 0.1, (9, cases)), RNG.uniform(1e5, 1e6, (3, cases)), RNG.uniform(250, 350, (3, cases))
+        m[0, 0] = np.nan
+        p = m * AIR.R_J_per_kgK * T / V
+        p_n, T_n = np.concatenate([p, p_bnd]), np.concatenate([T, T_bnd])
+        got = node_states(m, T, V, p_bnd, T_bnd, AIR.R_J_per_kgK)
+        assert all(_same(a, b) for a, b in zip((p_n, T_n, p_n / (AIR.R_J_per_kgK * T_n)), got))
+        x2 = RNG.uniform(0.1, 1.0, (30, cases))
+        for j, bad in zip(range(cases), (np.nan, 0.0, -1.0, np.inf, np.nan, 1.0, np.nan)):
+            x2[(3 * j) % 30, j] = bad
+        chambers = x2[:10]
+        expected = (np.all(chambers > 0.0, axis=0) & np.all(np.isfinite(chambers), axis=0)
+                    & np.all(np.isfinite(x2[12:20]), axis=0) & np.all(np.isfinite(x2[22:30]), axis=0))
+        assert np.array_equal(physical_columns(x2, 10, 12, 20, 22, 30), expected)
+
+
+def test_the_rk4_combinations_and_the_demand_flow_are_the_numpy_expressions():
+    """RK4's stage states and step (pneumatics.integrate, compiled) and the air demand's fade-out
+    (the clip ufunc called directly) against the numpy expressions, bit for bit."""
+    from pneumatics.air_supply import demand_flow_kg_per_s
+    from pneumatics.integrate import _rk4_stage, _rk4_step
+
+    x, k1, k2, k3, k4 = (RNG.normal(size=(125, 3)) * 10.0 ** RNG.integers(-8, 8, (125, 3)) for _ in range(5))
+    h = 0.005
+    assert _same(_rk4_stage(x, 0.5 * h, k1), x + 0.5 * h * k1)
+    assert _same(_rk4_step(x, k1, k2, k3, k4, h / 6.0), x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4))
+    p = np.r_[RNG.uniform(0.5e5, 3e5, 200), np.nan, -0.0, 101325.0]
+    assert _same(demand_flow_kg_per_s(0.002, p, 101325.0, 2e4), 0.002 * np.clip((p - 101325.0) / 2e4, 0.0, 1.0))
