@@ -182,7 +182,9 @@ class Service(Doors):
     """A route run by one car (module docstring). ``line_speed_m_per_s``: the speed it cruises
     at between stations (**assumed** 70 km/h, a metro's); ``acceleration_m_per_s2`` and
     ``braking_m_per_s2``: its service acceleration and braking (**assumed** 1.0 m/s2 each,
-    typical of metro stock); ``round_trip``: back to the first station after the last;
+    typical of metro stock); ``jerk_m_per_s3``: how fast the traction and brake controller ramps
+    the acceleration in and out (null, the default: at once, the acceleration steps; a metro's
+    controller ramps at ~0.5-1.5 m/s3, **assumed**); ``round_trip``: back to the first station after the last;
     ``door_open_delay_s``, ``door_close_s``: from the stop to the doors open, from their closing
     to the departure (**assumed** 2 s and 3 s); ``spread_s``: how long the boarders take to
     spread from the platform side over the floor after departure (**assumed** 15 s). The doors and
@@ -200,6 +202,8 @@ class Service(Doors):
         0.0, 3.0, "m/s^2", "a train's acceleration; 3 m/s^2 is a third of g", low_inclusive=False))
     braking_m_per_s2: float = field(default=1.0, metadata=plausible(
         0.0, 3.0, "m/s^2", "a train's braking; emergency braking of metros reaches ~1.5 m/s^2", low_inclusive=False))
+    jerk_m_per_s3: Optional[float] = field(default=None, metadata=plausible(
+        0.0, 20.0, "m/s^3", "a controller's jerk limit; metros ramp at ~0.5-1.5 m/s^3", low_inclusive=False))
     round_trip: bool = True
     door_open_delay_s: float = field(default=2.0, metadata=plausible(0.0, 60.0, "s"))
     door_close_s: float = field(default=3.0, metadata=plausible(0.0, 60.0, "s"))
@@ -233,7 +237,8 @@ def _plan(service: Service) -> Plan:
                 acceleration_m_per_s2=service.acceleration_m_per_s2, braking_m_per_s2=service.braking_m_per_s2,
                 door_open_delay_s=service.door_open_delay_s, door_close_s=service.door_close_s,
                 spread_s=service.spread_s, initial_kg=service.initial_kg, car_half_length_m=service.car_half_length_m,
-                slack_m=WHEEL_DRIVE_TRACK_SLACK_M if service.drive is not None else 0.0, grades=grades)
+                slack_m=WHEEL_DRIVE_TRACK_SLACK_M if service.drive is not None else 0.0, grades=grades,
+                jerk_m_per_s3=service.jerk_m_per_s3)
 
 
 def _items(data: Dict, key: str, cls, path: Path) -> Tuple[Any, ...]:
@@ -302,7 +307,7 @@ def parse(data, vehicle: VehicleParams, path: Path) -> Service:
         spans.append(end)
     _check_gradients(gradients, line_m, half, path)
     shortest = min(run_time_s(b.at_m - a.at_m, service.line_speed_m_per_s, service.acceleration_m_per_s2,
-                              service.braking_m_per_s2) for a, b in zip(stations, stations[1:]))
+                              service.braking_m_per_s2, service.jerk_m_per_s3) for a, b in zip(stations, stations[1:]))
     if not service.spread_s < shortest:
         raise ScenarioError(path, ["service", "spread_s"], f"the boarders must spread before the next stop: expected "
                                                            f"less than the shortest run ({shortest:.1f} s), got "

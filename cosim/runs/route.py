@@ -168,22 +168,67 @@ class RouteGrade:
         return sign * sum(g.at(x) for g in self.sections)
 
 
-def run_phases(distance_m: float, line_speed: float, accel: float, brake: float) -> List[Tuple[float, float]]:
-    """(duration [s], speed at its end [m/s]) of the phases of a run of ``distance_m`` from a stop
-    to a stop: accelerate at ``accel`` to the line speed (or as far as the distance allows),
-    cruise, brake at ``brake`` to the stop (the trapezoid or triangle of the speed)."""
-    v_top = min(line_speed, math.sqrt(2.0 * distance_m * accel * brake / (accel + brake)))
-    cruise_m = distance_m - v_top * v_top / (2.0 * accel) - v_top * v_top / (2.0 * brake)
-    phases = [(v_top / accel, v_top)]
-    if cruise_m > 1e-9 * distance_m:
-        phases.append((cruise_m / v_top, v_top))
-    phases.append((v_top / brake, 0.0))
+def _speed_change(v_m_per_s: float, accel: float, jerk: Optional[float]) -> List[Tuple[float, float, float]]:
+    """(duration [s], speed change at its end [m/s], |acceleration| at its end [m/s^2]) of the
+    phases that change the speed by ``v_m_per_s`` at most ``accel``: one phase of constant
+    acceleration without a jerk limit; with one, the acceleration ramps in at ``jerk``, holds at
+    ``accel`` and ramps out (or, for a small change, ramps in and out to sqrt(v j) without
+    holding). Symmetric in time, so the distance run is the mean speed times the duration."""
+    if jerk is None:
+        return [(v_m_per_s / accel, v_m_per_s, 0.0)]
+    peak = min(accel, math.sqrt(v_m_per_s * jerk))
+    ramp, ramp_v = peak / jerk, 0.5 * peak * peak / jerk
+    phases = [(ramp, ramp_v, peak)]
+    hold = v_m_per_s / peak - ramp                       # the acceleration held at its peak
+    if hold > 1e-12 * ramp:
+        phases.append((hold, v_m_per_s - ramp_v, peak))
+    phases.append((ramp, v_m_per_s, 0.0))
     return phases
 
 
-def run_time_s(distance_m: float, line_speed: float, accel: float, brake: float) -> float:
+def _change_s(v_m_per_s: float, accel: float, jerk: Optional[float]) -> float:
+    """How long a change of speed by ``v_m_per_s`` takes [s] (:func:`_speed_change`)."""
+    if jerk is None:
+        return v_m_per_s / accel
+    peak = min(accel, math.sqrt(v_m_per_s * jerk))
+    return v_m_per_s / peak + peak / jerk
+
+
+def run_phases(distance_m: float, line_speed: float, accel: float, brake: float,
+               jerk: Optional[float] = None) -> List[Tuple[float, float, float]]:
+    """(duration [s], speed at its end [m/s], acceleration at its end [m/s^2]) of the phases of a
+    run of ``distance_m`` from a stop to a stop: accelerate at ``accel`` to the line speed (or as
+    far as the distance allows), cruise, brake at ``brake`` to the stop (the trapezoid or triangle
+    of the speed); with a ``jerk`` limit [m/s^3] each change of acceleration ramps at it."""
+    def needed(v):                                       # the distance to reach v and stop again
+        return 0.5 * v * (_change_s(v, accel, jerk) + _change_s(v, brake, jerk))
+
+    if jerk is None:
+        v_top = min(line_speed, math.sqrt(2.0 * distance_m * accel * brake / (accel + brake)))
+    elif needed(line_speed) <= distance_m:
+        v_top = line_speed
+    else:                                                # needed(v) increases with v: bisect
+        lo, hi = 0.0, line_speed
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            if mid in (lo, hi):
+                break
+            lo, hi = (mid, hi) if needed(mid) <= distance_m else (lo, mid)
+        v_top = lo
+    if jerk is None:                                     # (the arithmetic before the jerk limit, to the bit)
+        cruise_m = distance_m - v_top * v_top / (2.0 * accel) - v_top * v_top / (2.0 * brake)
+    else:
+        cruise_m = distance_m - needed(v_top)
+    phases = [(d, v, a) for d, v, a in _speed_change(v_top, accel, jerk)]
+    if cruise_m > 1e-9 * distance_m:
+        phases.append((cruise_m / v_top, v_top, 0.0))
+    phases += [(d, v_top - v, -a) for d, v, a in _speed_change(v_top, brake, jerk)]
+    return phases
+
+
+def run_time_s(distance_m: float, line_speed: float, accel: float, brake: float, jerk: Optional[float] = None) -> float:
     """How long a run from stop to stop takes [s] (:func:`run_phases`)."""
-    return sum(d for d, _ in run_phases(distance_m, line_speed, accel, brake))
+    return sum(d for d, _, _ in run_phases(distance_m, line_speed, accel, brake, jerk))
 
 
 def _track(curves: Sequence[LineCurve], offset_m: float, length_m: float) -> TrackGeometry:
@@ -204,10 +249,11 @@ def _track(curves: Sequence[LineCurve], offset_m: float, length_m: float) -> Tra
 def plan(stations: Sequence[LineStation], curves: Sequence[LineCurve], *, round_trip: bool, line_speed_m_per_s: float,
          acceleration_m_per_s2: float, braking_m_per_s2: float, door_open_delay_s: float, door_close_s: float,
          spread_s: float, initial_kg: float, car_half_length_m: float, slack_m: float = 0.0,
-         grades: Sequence[LineGrade] = ()) -> Plan:
+         grades: Sequence[LineGrade] = (), jerk_m_per_s3: Optional[float] = None) -> Plan:
     """The route as the car runs it (module docstring). ``car_half_length_m``: from the car centre
     to its front wheelset (the track starts that far plus ``slack_m`` behind the origin and ends
-    that far plus 10 m beyond the last stop)."""
+    that far plus 10 m beyond the last stop). ``jerk_m_per_s3``: the jerk limit of the runs
+    between the stations (:func:`run_phases`; None: none, the acceleration steps)."""
     line_m = stations[-1].at_m
     offset = car_half_length_m + slack_m
     calls = [(st, st.at_m, st.platform_side, "out") for st in stations]
@@ -219,17 +265,18 @@ def plan(stations: Sequence[LineStation], curves: Sequence[LineCurve], *, round_
     end_m = calls[-1][1]
     track = _track(track_curves, offset, end_m + offset + car_half_length_m + 10.0)
 
-    times, speeds = [0.0], [0.0]
+    times, speeds, accels = [0.0], [0.0], [0.0]
     stops: List[Stop] = []
     on_board = initial_kg
     t = 0.0
     for i, (st, pos, side, direction) in enumerate(calls):
         if i > 0:
-            for duration, v in run_phases(pos - calls[i - 1][1], line_speed_m_per_s, acceleration_m_per_s2,
-                                          braking_m_per_s2):
+            for duration, v, a in run_phases(pos - calls[i - 1][1], line_speed_m_per_s, acceleration_m_per_s2,
+                                             braking_m_per_s2, jerk_m_per_s3):
                 t += duration
                 times.append(t)
                 speeds.append(v)
+                accels.append(a)
         turning = round_trip and direction == "out" and st is stations[-1]   # the terminus: alight, board for the return
         alight = st.alighting_kg if direction == "out" else st.return_alighting_kg
         board = st.return_boarding_kg if turning or direction == "back" else st.boarding_kg
@@ -240,7 +287,8 @@ def plan(stations: Sequence[LineStation], curves: Sequence[LineCurve], *, round_
         t = depart
         times.append(t)
         speeds.append(0.0)
-    speed = PhasedSpeedProfile(tuple(times), tuple(speeds))
+        accels.append(0.0)
+    speed = PhasedSpeedProfile(tuple(times), tuple(speeds), None if jerk_m_per_s3 is None else tuple(accels))
     knots, patch = _payload_knots(stops, initial_kg, spread_s)
     grade = RouteGrade(tuple(grades), offset, line_m, round_trip) if grades else None
     return Plan(tuple(stops), track, speed, offset, t, initial_kg, knots, patch, grade)

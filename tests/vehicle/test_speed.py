@@ -40,6 +40,57 @@ def test_a_wrong_profile_is_refused(times, speeds):
         PhasedSpeedProfile(times, speeds)
 
 
+# jerk-limited, as knots of a(t): stand 2 s; the acceleration ramps at 0.5 m/s^3 to 1 m/s^2 in 2 s
+# (to 1 m/s), holds 8 s (9 m/s), ramps out in 2 s (10 m/s); cruise 4 s; the braking ramps at
+# 1 m/s^3 to -2 m/s^2 in 2 s (8 m/s), holds 2 s (4 m/s), ramps out at 0.5 m/s^3 in 4 s (0 m/s);
+# stand 2 s
+JERK_TIMES = (0.0, 2.0, 4.0, 12.0, 14.0, 18.0, 20.0, 22.0, 26.0, 28.0)
+JERK_ACCELS = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, -2.0, -2.0, 0.0, 0.0)
+
+
+def _integral(times, values, v0=0.0):
+    """The running integral of a piecewise-linear function given at knots (trapezoids: exact)."""
+    return tuple(np.concatenate([[v0], v0 + np.cumsum(0.5 * (np.add(values[1:], values[:-1])) * np.diff(times))]))
+
+
+def test_a_jerk_limited_profile_integrates_its_accelerations():
+    speeds = _integral(JERK_TIMES, JERK_ACCELS)
+    assert speeds[5] == 10.0 and speeds[-1] == 0.0                      # by hand, above
+    profile = PhasedSpeedProfile(JERK_TIMES, speeds, JERK_ACCELS)
+    # the speed against a quadrature of the acceleration (quad, independent of the closed form),
+    # the distance against a quadrature of the speed; 1e-9: quad's tolerance on a polynomial per phase
+    breaks = list(JERK_TIMES[1:-1])
+    for t in (1.0, 3.0, 4.0, 7.7, 13.0, 16.0, 19.0, 21.5, 23.0, 25.5, 26.0, 27.0, 30.0):
+        dv = quad(profile.acceleration, 0.0, t, points=breaks, limit=200)[0]
+        assert profile.speed(t) == pytest.approx(dv, abs=1e-9)
+        ds = quad(lambda u: float(profile.speed(u)), 0.0, t, points=breaks, limit=200)[0]
+        assert profile.distance(t) == pytest.approx(ds, abs=1e-9)
+        # the inverse: the time where the car moves (standing, the time is ill-posed: at the stop
+        # v ~ j u^2 / 2, a round-off of the distance moves the time by its cube root), else the distance
+        back = profile.time_at_distance(profile.distance(t))
+        if 2.0 < t < 25.0:
+            assert back == pytest.approx(t, abs=1e-9)
+        assert profile.distance(back) == pytest.approx(profile.distance(t), abs=1e-12)
+    # the acceleration is continuous: on either side of every knot within 1e-9 s of it it differs
+    # by at most the jerk times 2e-9 s (the steepest ramp, 1 m/s^3)
+    for t in JERK_TIMES[1:-1]:
+        assert abs(profile.acceleration(t + 1e-9) - profile.acceleration(t - 1e-9)) <= 1.0 * 2e-9 + 1e-15
+    # the speed is vectorised like the piecewise-linear one's
+    assert np.allclose(profile.speed(np.array([3.0, 13.0])), [profile.speed(3.0), profile.speed(13.0)], atol=0)
+
+
+def test_a_jerk_limited_profile_refuses_speeds_its_accelerations_do_not_give():
+    speeds = _integral(JERK_TIMES, JERK_ACCELS)
+    with pytest.raises(ValueError, match="integral"):
+        PhasedSpeedProfile(JERK_TIMES, (0.0, *speeds[1:-1], 0.5), JERK_ACCELS)
+    with pytest.raises(ValueError, match="one per knot"):
+        PhasedSpeedProfile(JERK_TIMES, speeds, JERK_ACCELS[:-1])
+    # a ramp from -1 to +1 m/s^2 over 2 s from 0.5 m/s dips to 0 at 1 s and below:
+    # v(1) = 0.5 - 1 + 0.5 = 0 ... so from 0.4 m/s it reaches -0.1 m/s
+    with pytest.raises(ValueError, match="below 0"):
+        PhasedSpeedProfile((0.0, 2.0), (0.4, 0.4), (-1.0, 1.0))
+
+
 @pytest.mark.slow
 def test_a_kinematic_car_runs_at_the_profile_and_stops_where_it_says():
     import exudyn as exu

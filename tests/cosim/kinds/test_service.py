@@ -40,11 +40,45 @@ def test_the_shipped_line_plans_a_round_trip_of_about_30_minutes():
 
 def test_run_phases_are_the_trapezoid_by_hand():
     # 1000 m at 20 m/s, 1 m/s^2 up and 0.8 m/s^2 down: 200 m in 20 s, 250 m in 25 s, 550 m cruising in 27.5 s
-    assert run_phases(1000.0, 20.0, 1.0, 0.8) == [(20.0, 20.0), (27.5, 20.0), (25.0, 0.0)]
+    assert run_phases(1000.0, 20.0, 1.0, 0.8) == [(20.0, 20.0, 0.0), (27.5, 20.0, 0.0), (25.0, 0.0, -0.0)]
     # too short to reach the line speed: a triangle to v = sqrt(2 d a b / (a + b)) = 10 m/s for 100 m at 1 m/s^2
-    (t_up, v), (t_down, _) = run_phases(100.0, 20.0, 1.0, 1.0)
+    (t_up, v, _), (t_down, _, _) = run_phases(100.0, 20.0, 1.0, 1.0)
     assert v == pytest.approx(10.0) and t_up == pytest.approx(10.0) and t_down == pytest.approx(10.0)
     assert run_time_s(100.0, 20.0, 1.0, 1.0) == pytest.approx(20.0)
+
+
+def test_jerk_limited_run_phases_by_hand():
+    # 1000 m at 20 m/s, 1 m/s^2 up and 0.8 m/s^2 down, jerk 0.5 m/s^3: up, the acceleration ramps in
+    # over 2 s (1 m/s), holds 18 s, ramps out over 2 s: 22 s, 220 m (the S is point-symmetric, its
+    # mean speed 10 m/s); down, ramps of 1.6 s (0.64 m/s) around 23.4 s held: 26.6 s, 266 m; the
+    # cruise 514 m in 25.7 s. In all D/V + V/2A + A/2j + V/2B + B/2j = 50 + 10 + 1 + 12.5 + 0.8 s.
+    phases = run_phases(1000.0, 20.0, 1.0, 0.8, 0.5)
+    expected = [(2.0, 1.0, 1.0), (18.0, 19.0, 1.0), (2.0, 20.0, 0.0), (25.7, 20.0, 0.0),
+                (1.6, 19.36, -0.8), (23.4, 0.64, -0.8), (1.6, 0.0, -0.0)]
+    assert np.allclose(phases, expected, rtol=0, atol=1e-12)
+    assert run_time_s(1000.0, 20.0, 1.0, 0.8, 0.5) == pytest.approx(74.3, abs=1e-12)
+    # short runs: v (v + 1) = 20 m at 1 m/s^2 and 1 m/s^3 gives 4 m/s, each change v / A + A / j = 5 s;
+    # 0.25 m never reaches A: 2 v^1.5 = 0.25 m, v = 0.25 m/s, each change 2 sqrt(v / j) = 1 s
+    assert run_time_s(20.0, 20.0, 1.0, 1.0, 1.0) == pytest.approx(10.0, abs=1e-9)
+    phases = run_phases(0.25, 20.0, 1.0, 1.0, 1.0)
+    assert [round(d, 9) for d, _, _ in phases] == [0.5, 0.5, 0.5, 0.5]
+    assert max(v for _, v, _ in phases) == pytest.approx(0.25, abs=1e-12)
+
+
+def test_a_jerk_limited_route_stops_at_its_stations_with_a_continuous_acceleration():
+    service = load_scenario(LINE, ["service.jerk_m_per_s3=0.8"]).experiment
+    route = service.plan
+    assert route.speed.accelerations_m_per_s2 is not None
+    for stop in route.stops:                          # where the plan puts it, to round-off over the line
+        assert route.offset_m + route.speed.distance(stop.arrive_s) == pytest.approx(stop.s_m, abs=1e-8)
+        assert route.speed.speed(stop.arrive_s) == pytest.approx(0.0, abs=1e-12)
+    t = np.asarray(route.speed.times_s[1:-1])
+    jump = [abs(route.speed.acceleration(x + 1e-7) - route.speed.acceleration(x - 1e-7)) for x in t]
+    assert max(jump) <= 0.8 * 2e-7 + 1e-12            # continuous: at most the jerk times the 2e-7 s apart
+    # slower than the same line without the limit, by A / 2j + B / 2j = 1.25 s a run (14 runs, round trip)
+    plain = load_scenario(LINE).experiment.plan
+    runs = len(route.stops) - 1
+    assert route.duration_s - plain.duration_s == pytest.approx(runs * 1.25, abs=1e-6)
 
 
 def test_the_return_runs_the_curves_backwards_turning_the_other_way():
@@ -128,6 +162,9 @@ def test_the_passengers_mass_is_conserved_along_the_trip():
     (["service.gradients=[{at_m: 100, length_m: 300, grade: 0}]"], "service.gradients[0].grade", "0"),
     (["service.gradients=[{at_m: 100, length_m: 300}]"], "service.gradients[0].grade", "missing"),
     (["service.gradients=[{at_m: 100, length_m: 300, grade: -0.04}]"], None, None),
+    (["service.jerk_m_per_s3=0"], "service.jerk_m_per_s3", "(0, 20] m/s^3"),
+    (["service.jerk_m_per_s3=fast"], "service.jerk_m_per_s3", "number"),
+    (["service.jerk_m_per_s3=0.8"], None, None),
 ])
 def test_a_wrong_route_is_refused_naming_its_key(sets, key, words):
     if key is None:
