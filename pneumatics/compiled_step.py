@@ -248,6 +248,15 @@ def _c(v, dtype=float) -> np.ndarray:
     return np.array(v, dtype=dtype, order="C")
 
 
+def _input(v, shape) -> np.ndarray:
+    """``v`` as a writable C-contiguous float array of ``shape`` (a 1-D input one column, a
+    column broadcast over the cases): itself when it is one already (the co-simulation's)."""
+    if type(v) is np.ndarray and v.shape == shape and v.dtype == np.float64 and v.flags.c_contiguous \
+            and v.flags.writeable:
+        return v
+    return _c(np.broadcast_to(np.reshape(v, (shape[0], -1)), shape))
+
+
 class CompiledStep:
     """The macro-step of ``runtime`` (a :class:`~pneumatics.runtime.CircuitRuntime` whose fused
     laws exist) as one call of :func:`_advance`; its arrays looked up once, per number of cases."""
@@ -294,30 +303,25 @@ class CompiledStep:
         """``x`` advanced from t0 to t1 by :func:`pneumatics.integrate.rk4` in ``n_steps`` along
         ``motion`` (a :class:`pneumatics.integrate.HermiteMotion`), ``rate0`` its first stage if
         given: the present path's numbers but for the matrix products' round-off (module docstring)."""
-        x2 = _c(x.reshape(self._size, -1))
-        n = x2.shape[1]
-        nb = self._nb
-        flow, heat = self._arguments(n)
+        x2 = _input(x, (self._size, x.size // self._size))
+        shape = (self._nb, x2.shape[1])
+        flow, heat = self._arguments(shape[1])
         has_rate0 = rate0 is not None
-        r0 = _c(rate0.reshape(self._size, -1)) if has_rate0 else x2
-        shape = (nb, n)
-        z0, dz, zd0, zd1 = (_c(np.broadcast_to(np.reshape(v, (nb, -1)), shape))
-                            for v in (motion.z0, motion.dz, motion.zd0, motion.zd1))
-        out = _advance(x2, float(t0_s), float(t1_s), int(n_steps), r0, has_rate0, float(motion.t0), float(motion.H),
-                       z0, dz, zd0, zd1, self._geometry, flow, self._air, self._rates, heat, self._signals,
-                       self._governed)
+        out = _advance(x2, float(t0_s), float(t1_s), int(n_steps), _input(rate0, x2.shape) if has_rate0 else x2,
+                       has_rate0, float(motion.t0), float(motion.H), _input(motion.z0, shape), _input(motion.dz, shape),
+                       _input(motion.zd0, shape), _input(motion.zd1, shape), self._geometry, flow, self._air,
+                       self._rates, heat, self._signals, self._governed)
         return out.reshape(x.shape)
 
     def derivatives_and_held(self, x, z_m, zdot_m_per_s):
         """:meth:`CircuitRuntime.derivatives_and_held` in one compiled call (the co-simulation's
         force laws and RK4's first stage at the start of every macro-step): the present path's
         numbers but for the matrix products' round-off."""
-        x2 = _c(x.reshape(self._size, -1))
-        n = x2.shape[1]
-        shape = (self._nb, n)
-        z2, zd2 = (_c(np.broadcast_to(np.reshape(v, (self._nb, -1)), shape)) for v in (z_m, zdot_m_per_s))
-        flow, heat = self._arguments(n)
-        dx, held = _derivatives_and_held(x2, z2, zd2, self._geometry, flow, self._air, self._rates, heat, self._signals)
+        x2 = _input(x, (self._size, x.size // self._size))
+        shape = (self._nb, x2.shape[1])
+        flow, heat = self._arguments(shape[1])
+        dx, held = _derivatives_and_held(x2, _input(z_m, shape), _input(zdot_m_per_s, shape), self._geometry, flow,
+                                         self._air, self._rates, heat, self._signals)
         return dx.reshape(x.shape), held.reshape(x.shape)
 
 

@@ -164,7 +164,7 @@ def advance(circuit: Circuit, x: np.ndarray, t0_s: float, t1_s: float, motion: M
     ``rate0``: the derivative at (t0, x) under ``motion(t0)``, if already known (see :func:`rk4`)."""
     n = max(1, math.ceil((t1_s - t0_s) / h_max_s - 1e-9))
     step = getattr(circuit, "compiled_step", None)
-    if step is not None and type(motion) is HermiteMotion and np.ndim(x) and np.size(x):
+    if step is not None and type(motion) is HermiteMotion and type(x) is np.ndarray and x.size:
         # the whole advance in one compiled call (pneumatics.compiled_step): the same steps and
         # stages, the matrix products summed in their own order (round-off)
         return step.advance(x, t0_s, t1_s, n, motion, rate0)

@@ -368,7 +368,7 @@ class CircuitRuntime:
         With a compiled macro-step (:attr:`compiled_step`) its one compiled call instead, whose
         matrix products differ at round-off (it evaluates afresh: cheaper than reusing ``evaluated``)."""
         step = self.compiled_step
-        if step is not None and np.size(x):      # one compiled call (pneumatics.compiled_step)
+        if step is not None and type(x) is np.ndarray and x.size:   # one compiled call (pneumatics.compiled_step)
             return step.derivatives_and_held(x, z_m, zdot_m_per_s)
         x2, z2, zdot2 = self._inputs(x, z_m, zdot_m_per_s)
         dx, terms = self._rates_at_crushing(x2, z2, evaluated)
