@@ -31,7 +31,8 @@ import numpy as np
 from .air_supply import compression_work
 from .compiled import arrays, scalar
 from .fused import _flows, _rates, _temperatures, governors
-from .valve_signals import _chain, _rates as _signal_rates
+from .valve_signals import _chain
+from .valve_signals import _rates as _signal_rates
 
 # the laws the present path calls compiled one by one, here compiled into the step itself
 _flows_law = scalar(_flows.py_func)

@@ -13,10 +13,9 @@ row's scale, is four orders above what they differ by here (< 1e-15 relative aft
 and far below any error of a law (a wrong term moves a row by its own size, >= 1e-6 of it)."""
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
+from test_fused import CIRCUITS, random_state
 
 from pneumatics.chamber import Bellow, Tank
 from pneumatics.circuit import Circuit
@@ -25,8 +24,6 @@ from pneumatics.integrate import advance, hermite_motion
 from pneumatics.layouts import car_circuit
 from pneumatics.pipe import Pipe
 from pneumatics.valves import LevellingValve
-
-from test_fused import CIRCUITS, random_state
 
 RNG = np.random.default_rng(11)
 TOLERANCE = 1e-12
