@@ -31,6 +31,7 @@ import numpy as np
 from .air_supply import compression_work
 from .compiled import arrays, scalar
 from .fused import _flows, _rates, _temperatures, governors
+from .integrate import _hermite_z, _hermite_zd, _rk4_stage, _rk4_step, hermite_coefficients
 from .valve_signals import _chain
 from .valve_signals import _rates as _signal_rates
 
@@ -41,6 +42,9 @@ _temperatures_law = scalar(_temperatures.py_func)
 _governors_law = scalar(governors.py_func)
 _chain_law = scalar(_chain.py_func)
 _signal_rates_law = scalar(_signal_rates.py_func)
+# and rk4's: its stage and step combinations (elementwise laws), the motion's terms
+_stage_law, _step_law = scalar(_rk4_stage.py_func), scalar(_rk4_step.py_func)
+_hermite_z_law, _hermite_zd_law = scalar(_hermite_z.py_func), scalar(_hermite_zd.py_func)
 
 
 @scalar
@@ -183,28 +187,19 @@ def _derivatives_and_held(x2, z2, zd2, geometry, flow, air, rates, heat, signals
 
 @scalar
 def _motion(t, t0, H, z0, dz, zd0, zd1):
-    """(z, zdot) of :func:`pneumatics.integrate.hermite_motion` at ``t``: its coefficients and
-    terms, in its order."""
-    s = (t - t0) / H
-    s2, s3 = s * s, s * s * s
-    c_dz, c_zd0, c_zd1 = 3.0 * s2 - 2.0 * s3, (s - 2.0 * s2 + s3) * H, (s3 - s2) * H
-    d_dz, d_zd0, d_zd1 = 6.0 * s - 6.0 * s2, 1.0 - 4.0 * s + 3.0 * s2, 3.0 * s2 - 2.0 * s
-    rows, n = z0.shape
-    z, zd = np.empty((rows, n)), np.empty((rows, n))
-    for i in range(rows):
-        for j in range(n):
-            z[i, j] = z0[i, j] + c_dz * dz[i, j] + c_zd0 * zd0[i, j] + c_zd1 * zd1[i, j]
-            zd[i, j] = d_dz * dz[i, j] / H + d_zd0 * zd0[i, j] + d_zd1 * zd1[i, j]
-    return z, zd
+    """(z, zdot) of :class:`pneumatics.integrate.HermiteMotion` at ``t``: its coefficients and
+    terms (the same functions)."""
+    c_dz, c_zd0, c_zd1, d_dz, d_zd0, d_zd1 = hermite_coefficients((t - t0) / H, H)
+    return _hermite_z_law(z0, dz, zd0, zd1, c_dz, c_zd0, c_zd1), _hermite_zd_law(dz, zd0, zd1, d_dz, H, d_zd0, d_zd1)
 
 
 @scalar
 def _stage(x, c, k):
-    """x + c k (RK4's stage state, as pneumatics.integrate._rk4_stage)."""
+    """x + c k, RK4's stage state (pneumatics.integrate._rk4_stage, element by element)."""
     out = np.empty_like(x)
     for i in range(x.shape[0]):
         for j in range(x.shape[1]):
-            out[i, j] = x[i, j] + c * k[i, j]
+            out[i, j] = _stage_law(x[i, j], c, k[i, j])
     return out
 
 
@@ -233,7 +228,7 @@ def _advance(x, t0, t1, n_steps, rate0, has_rate0, m_t0, H, z0, dz, zd0, zd1, ge
         new = np.empty_like(x)
         for r in range(x.shape[0]):
             for j in range(x.shape[1]):
-                new[r, j] = x[r, j] + h6 * (k1[r, j] + 2.0 * (k2[r, j] + k3[r, j]) + k4[r, j])
+                new[r, j] = _step_law(x[r, j], k1[r, j], k2[r, j], k3[r, j], k4[r, j], h6)
         if has_governors:
             states, switched = _governors_law(new, nc, reservoir, V0r, R, cut_in, cut_out, g0)
             if switched:

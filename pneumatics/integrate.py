@@ -13,13 +13,15 @@ Two integrators serve different needs:
 from __future__ import annotations
 
 import math
-from typing import Callable, Tuple
+from typing import TYPE_CHECKING, Callable, Tuple
 
 import numpy as np
 
-from .circuit import Circuit
-from .compiled import arrays, elementwise
+from .compiled import arrays, elementwise, scalar
 from .errors import CircuitError
+
+if TYPE_CHECKING:        # runtime -> compiled_step imports this module: Circuit for the annotations only
+    from .circuit import Circuit
 
 #: motion(t_s) -> (z_m, zdot_m_per_s), each shaped (bellows,) or (bellows, cases)
 Motion = Callable[[float], Tuple[np.ndarray, np.ndarray]]
@@ -35,6 +37,14 @@ def _hermite_z(z0, dz, zd0, zd1, c_dz, c_zd0, c_zd1):
 def _hermite_zd(dz, zd0, zd1, c_dz, H, c_zd0, c_zd1):
     """c_dz dz / H + c_zd0 zd0 + c_zd1 zd1, added in this order."""
     return c_dz * dz / H + c_zd0 * zd0 + c_zd1 * zd1
+
+
+@scalar
+def hermite_coefficients(s, H):
+    """The Hermite motion's coefficients at s = (t - t0) / H: z's of dz, zd0, zd1, then zd's of
+    dz (before its / H), zd0, zd1 (:class:`HermiteMotion`; the compiled macro-step's too)."""
+    s2, s3 = s * s, s * s * s
+    return 3 * s2 - 2 * s3, (s - 2 * s2 + s3) * H, (s3 - s2) * H, 6 * s - 6 * s2, 1 - 4 * s + 3 * s2, 3 * s2 - 2 * s
 
 
 class HermiteMotion:
@@ -57,11 +67,8 @@ class HermiteMotion:
 
     def __call__(self, t):
         t0, H, z0, dz, zd0, zd1 = self.t0, self.H, self.z0, self.dz, self.zd0, self.zd1
-        s = (t - t0) / H
-        s2, s3 = s * s, s * s * s
-        z = _hermite_z(z0, dz, zd0, zd1, 3 * s2 - 2 * s3, (s - 2 * s2 + s3) * H, (s3 - s2) * H)
-        zd = _hermite_zd(dz, zd0, zd1, 6 * s - 6 * s2, H, 1 - 4 * s + 3 * s2, 3 * s2 - 2 * s)
-        return z, zd
+        c_dz, c_zd0, c_zd1, d_dz, d_zd0, d_zd1 = hermite_coefficients((t - t0) / H, H)
+        return _hermite_z(z0, dz, zd0, zd1, c_dz, c_zd0, c_zd1), _hermite_zd(dz, zd0, zd1, d_dz, H, d_zd0, d_zd1)
 
 
 def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1) -> HermiteMotion:
