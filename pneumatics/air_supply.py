@@ -53,6 +53,7 @@ import numpy as np
 
 from pneumorail.quantities import plausible, ranged
 
+from .compiled import scalar
 from .gas import ABSOLUTE_PRESSURE, AIR_TEMPERATURE
 
 #: DIN 1343 normal conditions [K], [Pa]: a normal litre (Nl) is a litre of air at these
@@ -145,9 +146,16 @@ def governor(running, p_reservoir_Pa, p_cut_in_Pa, p_cut_out_Pa):
 def compression_work_J_per_kg(p_Pa, p_atm_Pa, T_atm_K, gas):
     """(isothermal, adiabatic) work per kg of air compressed from the atmosphere to ``p_Pa`` [J/kg]
     (0 at or below the atmosphere's pressure)."""
+    return compression_work(p_Pa, p_atm_Pa, T_atm_K, gas.R_J_per_kgK, gas.cp_J_per_kgK, gas.gamma)
+
+
+@scalar
+def compression_work(p_Pa, p_atm_Pa, T_atm_K, R, cp, gamma):
+    """:func:`compression_work_J_per_kg` of the gas constants (R, c_p, gamma): numpy's on arrays,
+    and the compiled macro-step's (:mod:`pneumatics.compiled_step`) the same law compiled."""
     ratio = np.maximum(p_Pa / p_atm_Pa, 1.0)
-    isothermal = gas.R_J_per_kgK * T_atm_K * np.log(ratio)
-    adiabatic = gas.cp_J_per_kgK * T_atm_K * (ratio ** ((gas.gamma - 1.0) / gas.gamma) - 1.0)
+    isothermal = R * T_atm_K * np.log(ratio)
+    adiabatic = cp * T_atm_K * (ratio ** ((gamma - 1.0) / gamma) - 1.0)
     return isothermal, adiabatic
 
 

@@ -27,8 +27,8 @@ from typing import Callable
 #: the sources whose constants and helpers the compiled laws use: numba checks a cached law
 #: against its own file only, so the laws' cache names carry a digest of all of them (a changed
 #: constant, e.g. gas.T_REF_K, compiles afresh instead of running stale machine code)
-SOURCES = ("chamber.py", "compiled.py", "compressible_pipe.py", "fused.py", "gas.py", "heat_transfer.py", "integrate.py",
-           "orifice.py", "pipe.py", "valve_signals.py", "valves.py")
+SOURCES = ("air_supply.py", "chamber.py", "compiled.py", "compiled_step.py", "compressible_pipe.py", "fused.py", "gas.py",
+           "heat_transfer.py", "integrate.py", "orifice.py", "pipe.py", "valve_signals.py", "valves.py")
 _HERE = Path(__file__).resolve().parent
 _HELPERS: list = []
 _LOCK = threading.Lock()

@@ -13,13 +13,15 @@ Two integrators serve different needs:
 from __future__ import annotations
 
 import math
-from typing import Callable, Tuple
+from typing import TYPE_CHECKING, Callable, Tuple
 
 import numpy as np
 
-from .circuit import Circuit
-from .compiled import arrays, elementwise
+from .compiled import arrays, elementwise, scalar
 from .errors import CircuitError
+
+if TYPE_CHECKING:        # runtime -> compiled_step imports this module: Circuit for the annotations only
+    from .circuit import Circuit
 
 #: motion(t_s) -> (z_m, zdot_m_per_s), each shaped (bellows,) or (bellows, cases)
 Motion = Callable[[float], Tuple[np.ndarray, np.ndarray]]
@@ -37,7 +39,15 @@ def _hermite_zd(dz, zd0, zd1, c_dz, H, c_zd0, c_zd1):
     return c_dz * dz / H + c_zd0 * zd0 + c_zd1 * zd1
 
 
-def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1):
+@scalar
+def hermite_coefficients(s, H):
+    """The Hermite motion's coefficients at s = (t - t0) / H: z's of dz, zd0, zd1, then zd's of
+    dz (before its / H), zd0, zd1 (:class:`HermiteMotion`; the compiled macro-step's too)."""
+    s2, s3 = s * s, s * s * s
+    return 3 * s2 - 2 * s3, (s - 2 * s2 + s3) * H, (s3 - s2) * H, 6 * s - 6 * s2, 1 - 4 * s + 3 * s2, 3 * s2 - 2 * s
+
+
+class HermiteMotion:
     """Cubic Hermite interpolation of the crushing over [t0, t1]: matches z and dz/dt at both ends
     (the co-simulation master's motion over a macro-step; the exported FMU's with ``lookahead``).
 
@@ -46,17 +56,24 @@ def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1):
     dz = z1 - z0: the coefficients are floats, the terms over the bellows compiled
     (:mod:`pneumatics.compiled`: a call per stage of the integrator instead of a numpy operation
     per term, the same operations in the same order; functions of arrays, not ufuncs: they load
-    in a few ms, a ufunc in ~60 ms)."""
-    H = t1 - t0
-    dz = z1 - z0
+    in a few ms, a ufunc in ~60 ms). A motion of its own type (not a closure) so that
+    :func:`advance` can hand its parameters to the compiled macro-step
+    (:mod:`pneumatics.compiled_step`), which evaluates it the same way."""
 
-    def motion(t):
-        s = (t - t0) / H
-        s2, s3 = s * s, s * s * s
-        z = _hermite_z(z0, dz, zd0, zd1, 3 * s2 - 2 * s3, (s - 2 * s2 + s3) * H, (s3 - s2) * H)
-        zd = _hermite_zd(dz, zd0, zd1, 6 * s - 6 * s2, H, 1 - 4 * s + 3 * s2, 3 * s2 - 2 * s)
-        return z, zd
-    return motion
+    __slots__ = ("t0", "H", "z0", "dz", "zd0", "zd1")
+
+    def __init__(self, t0: float, t1: float, z0, zd0, z1, zd1):
+        self.t0, self.H, self.z0, self.dz, self.zd0, self.zd1 = t0, t1 - t0, z0, z1 - z0, zd0, zd1
+
+    def __call__(self, t):
+        t0, H, z0, dz, zd0, zd1 = self.t0, self.H, self.z0, self.dz, self.zd0, self.zd1
+        c_dz, c_zd0, c_zd1, d_dz, d_zd0, d_zd1 = hermite_coefficients((t - t0) / H, H)
+        return _hermite_z(z0, dz, zd0, zd1, c_dz, c_zd0, c_zd1), _hermite_zd(dz, zd0, zd1, d_dz, H, d_zd0, d_zd1)
+
+
+def hermite_motion(t0: float, t1: float, z0, zd0, z1, zd1) -> HermiteMotion:
+    """The crushing's cubic Hermite interpolation over [t0, t1] (:class:`HermiteMotion`)."""
+    return HermiteMotion(t0, t1, z0, zd0, z1, zd1)
 
 
 @elementwise(3)
@@ -153,6 +170,11 @@ def advance(circuit: Circuit, x: np.ndarray, t0_s: float, t1_s: float, motion: M
     """Integrate from t0 to t1 with classical RK4 in equal sub-steps no longer than ``h_max_s``.
     ``rate0``: the derivative at (t0, x) under ``motion(t0)``, if already known (see :func:`rk4`)."""
     n = max(1, math.ceil((t1_s - t0_s) / h_max_s - 1e-9))
+    step = getattr(circuit, "compiled_step", None)
+    if step is not None and type(motion) is HermiteMotion and type(x) is np.ndarray and x.size:
+        # the whole advance in one compiled call (pneumatics.compiled_step): the same steps and
+        # stages, the matrix products summed in their own order (round-off)
+        return step.advance(x, t0_s, t1_s, n, motion, rate0)
     switch = circuit.update_governors if circuit.has_governors else None
     return rk4(circuit_rhs(circuit, motion), x, t0_s, t1_s, n, rate0=rate0, switch=switch)
 

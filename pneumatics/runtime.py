@@ -28,6 +28,7 @@ from .chamber import (
     upstream_enthalpy_flow_W,
 )
 from .compiled import arrays
+from .compiled_step import compiled_step
 from .compressible_pipe import PipeCell, choked_end_flow_kg_per_s, segment_flow_rate_kg_per_s2
 from .errors import CircuitDiverged, CircuitError
 from .fused import FusedBellows, fused_laws, governors
@@ -181,6 +182,9 @@ class CircuitRuntime:
         self._reservoirs = np.asarray(self._air.reservoir, dtype=np.int64).reshape(-1)
         self._reservoir_V0 = np.ascontiguousarray(self._chambers.V0_m3[self._reservoirs], dtype=float).reshape(-1, 1)
         self._last_Hw = None          # (w, its links' enthalpy flows, a compressor works) of the last fused evaluation
+        #: the macro-step's RK4 advance as one compiled call (:mod:`pneumatics.compiled_step`; None:
+        #: :func:`pneumatics.integrate.rk4` over :meth:`derivatives`)
+        self.compiled_step = compiled_step(self)
 
     # ----------------------------------------------------------------------------- state
     def initial_state(self, p0_Pa: Optional[Mapping[str, float]] = None, n_cases: Optional[int] = None) -> np.ndarray:
@@ -360,7 +364,12 @@ class CircuitRuntime:
         bit for bit, from the same evaluation of the flows (they depend on the crushing only, not
         on its rate); only the rows that the rate enters (temperatures through p dV/dt, heat and
         work accumulators, valve signals) are computed twice. ``evaluated``: :meth:`evaluate` at
-        this very (x, z_m), when the caller has it already (the same numbers, not computed again)."""
+        this very (x, z_m), when the caller has it already (the same numbers, not computed again).
+        With a compiled macro-step (:attr:`compiled_step`) its one compiled call instead, whose
+        matrix products differ at round-off (it evaluates afresh: cheaper than reusing ``evaluated``)."""
+        step = self.compiled_step
+        if step is not None and type(x) is np.ndarray and x.size:   # one compiled call (pneumatics.compiled_step)
+            return step.derivatives_and_held(x, z_m, zdot_m_per_s)
         x2, z2, zdot2 = self._inputs(x, z_m, zdot_m_per_s)
         dx, terms = self._rates_at_crushing(x2, z2, evaluated)
         held = dx.copy()

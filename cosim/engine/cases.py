@@ -18,7 +18,7 @@ from cosim.results.series import car_dataset, concat_cases
 from cosim.scenario.imported import is_imported
 from cosim.scenario.model import Scenario
 from cosim.scenario.schema import k_label
-from pneumatics.integrate import advance, stable_step_s
+from pneumatics.integrate import advance, hermite_motion, stable_step_s
 from pneumatics.layouts import static_pressures
 from vehicle.params import BELLOWS
 
@@ -128,6 +128,7 @@ def _load_compiled_laws(variants: Sequence[Scenario]) -> None:
                     c.derivatives_and_held(x, z, z)
                     c.bellow_force_laws(x, z, x, 0.0)
                     advance(c, x, 0.0, 1e-3, lambda t: (z, z), 1e-3)
+                    advance(c, x, 0.0, 1e-3, hermite_motion(0.0, 1e-3, z, z, z, z), 1e-3)   # compiled_step's
                     c.physical_cases(x)
         except Exception:                       # noqa: BLE001 -- only a head start: the workers compile what they need
             pass

@@ -85,6 +85,7 @@ def test_the_fused_evaluation_is_the_numpy_one_bit_for_bit(name, k):
     plain = Circuit(make(), k_W_per_K=np.array(k), faults=faults, active_faults=range(len(faults)))
     assert fused._fused is not None
     plain._fused = None                      # the numpy evaluation
+    fused.compiled_step = plain.compiled_step = None   # the fused one call by call (test_compiled_step.py: the step)
     with np.errstate(all="ignore"):
         for trial in range(12):
             x, z, zd = random_state(fused, len(k), nan=trial % 4 == 3)
