@@ -186,25 +186,18 @@ def _speed_change(v_m_per_s: float, accel: float, jerk: Optional[float]) -> List
     return phases
 
 
-def _change_s(v_m_per_s: float, accel: float, jerk: Optional[float]) -> float:
-    """How long a change of speed by ``v_m_per_s`` takes [s] (:func:`_speed_change`)."""
-    if jerk is None:
-        return v_m_per_s / accel
-    peak = min(accel, math.sqrt(v_m_per_s * jerk))
-    return v_m_per_s / peak + peak / jerk
-
-
 def run_phases(distance_m: float, line_speed: float, accel: float, brake: float,
                jerk: Optional[float] = None) -> List[Tuple[float, float, float]]:
     """(duration [s], speed at its end [m/s], acceleration at its end [m/s^2]) of the phases of a
     run of ``distance_m`` from a stop to a stop: accelerate at ``accel`` to the line speed (or as
     far as the distance allows), cruise, brake at ``brake`` to the stop (the trapezoid or triangle
     of the speed); with a ``jerk`` limit [m/s^3] each change of acceleration ramps at it."""
-    def needed(v):                                       # the distance to reach v and stop again
-        return 0.5 * v * (_change_s(v, accel, jerk) + _change_s(v, brake, jerk))
+    def needed(v):                                       # the distance to reach v and stop again (mean speed v / 2)
+        return 0.5 * v * sum(d for change in (accel, brake) for d, _, _ in _speed_change(v, change, jerk))
 
-    if jerk is None:
+    if jerk is None:                                     # (the arithmetic before the jerk limit, to the bit)
         v_top = min(line_speed, math.sqrt(2.0 * distance_m * accel * brake / (accel + brake)))
+        cruise_m = distance_m - v_top * v_top / (2.0 * accel) - v_top * v_top / (2.0 * brake)
     elif needed(line_speed) <= distance_m:
         v_top = line_speed
     else:                                                # needed(v) increases with v: bisect
@@ -215,11 +208,9 @@ def run_phases(distance_m: float, line_speed: float, accel: float, brake: float,
                 break
             lo, hi = (mid, hi) if needed(mid) <= distance_m else (lo, mid)
         v_top = lo
-    if jerk is None:                                     # (the arithmetic before the jerk limit, to the bit)
-        cruise_m = distance_m - v_top * v_top / (2.0 * accel) - v_top * v_top / (2.0 * brake)
-    else:
+    if jerk is not None:
         cruise_m = distance_m - needed(v_top)
-    phases = [(d, v, a) for d, v, a in _speed_change(v_top, accel, jerk)]
+    phases = _speed_change(v_top, accel, jerk)
     if cruise_m > 1e-9 * distance_m:
         phases.append((cruise_m / v_top, v_top, 0.0))
     phases += [(d, v_top - v, -a) for d, v, a in _speed_change(v_top, brake, jerk)]

@@ -13,6 +13,7 @@ from cosim.load import load_scenario
 from cosim.runs.route import RoutePayload, run_phases, run_time_s
 from pneumatics.air_supply import normal_density_kg_per_m3
 from pneumatics.gas import AIR
+from vehicle.speed import PhasedSpeedProfile
 
 from helpers import SCENARIOS
 
@@ -63,6 +64,26 @@ def test_jerk_limited_run_phases_by_hand():
     phases = run_phases(0.25, 20.0, 1.0, 1.0, 1.0)
     assert [round(d, 9) for d, _, _ in phases] == [0.5, 0.5, 0.5, 0.5]
     assert max(v for _, v, _ in phases) == pytest.approx(0.25, abs=1e-12)
+
+
+@pytest.mark.parametrize("distance", [15.0, 80.0, 400.0, 1500.0])
+@pytest.mark.parametrize("line_speed, accel, brake", [(19.4, 1.0, 1.0), (25.0, 0.6, 1.3), (12.0, 1.5, 0.8)])
+@pytest.mark.parametrize("jerk", [0.3, 1.0, 5.0])
+def test_jerk_limited_runs_keep_their_limits_and_land_at_the_stop(distance, line_speed, accel, brake, jerk):
+    # the matrix of runs users give (short runs that reach neither the line speed nor the full
+    # acceleration, long ones, unequal acceleration and braking, soft and hard jerk): the profile of
+    # the phases integrates to the distance (1e-9 relative: bisection and sums' round-off), never
+    # exceeds the line speed, the acceleration, the braking or the jerk, and never runs backwards
+    phases = run_phases(distance, line_speed, accel, brake, jerk)
+    times = np.concatenate([[0.0], np.cumsum([d for d, _, _ in phases])])
+    profile = PhasedSpeedProfile(tuple(times), (0.0, *(v for _, v, _ in phases)), (0.0, *(a for _, _, a in phases)))
+    assert profile.distance(times[-1]) == pytest.approx(distance, rel=1e-9)
+    t = np.linspace(0.0, times[-1], 4001)
+    v = profile.speed(t)
+    a = np.array([profile.acceleration(x) for x in t])
+    assert v.min() >= -1e-12 and v.max() <= line_speed * (1 + 1e-12)
+    assert a.max() <= accel * (1 + 1e-12) and a.min() >= -brake * (1 + 1e-12)
+    assert np.all(np.abs(np.diff([0.0, *(a for _, _, a in phases)]) / np.diff(times)) <= jerk * (1 + 1e-9))
 
 
 def test_a_jerk_limited_route_stops_at_its_stations_with_a_continuous_acceleration():
