@@ -96,7 +96,9 @@ class MetroCar:
         spectral_radius: generalized-alpha spectral radius at infinite frequency, 0 <= rho <= 1
             (numerical damping of what the step cannot resolve, e.g. the ~240 Hz
             wheelset-on-contact modes; :data:`SPECTRAL_RADIUS`).
-        newton_abs_tol: Newton absolute tolerance on the residual (force scale [N]).
+        newton_abs_tol: Newton absolute tolerance on the residual (force scale [N]); never
+            below the round-off of the coordinates far from the origin (beyond 4096 m, see
+            :attr:`.solver.CarSolver.ROUNDOFF_RESIDUAL_N_PER_M`).
         newton_rel_tol: Newton tolerance relative to the initial residual of the step; None:
             1e-8 with kinematic guidance, :attr:`CONTACT_NEWTON_REL_TOL` with contact guidance.
         reuse_jacobian: reuse the Newton Jacobian across :meth:`advance` calls (see module doc).
@@ -290,7 +292,7 @@ class MetroCar:
         if t_end_s > self.t_end_max_s + 1e-9:
             raise ValueError(f"advance: at t_end_s={t_end_s} s the front wheelset would have "
                              f"left the track (t_end_max_s={self.t_end_max_s} s)")
-        ok = self.solver.solve(t_end_s)
+        ok = self.solver.solve(t_end_s, self.path.reach_m(t_end_s))
         if self.contact is not None and self.hooks.left_table is not None:
             t_out, y_out = self.hooks.left_table
             lo, hi = self.contact.track_contact.table.y_range_m

@@ -80,6 +80,13 @@ class CarPath:
         """Arc length [m] of the car centre at time t."""
         return self.start_s_m + self.distance_m(t)
 
+    def reach_m(self, t: float) -> float:
+        """An upper bound of the distance [m] of the car's wheelsets from the origin at time t
+        (the track starts at the origin; a car without one runs along x): the largest of
+        their arc lengths' magnitudes, plus the distance run (a profile's distance is monotonic,
+        so the bound holds over the whole advance to t)."""
+        return float(np.max(np.abs(self.wheelset_s0_m))) + abs(self.distance_m(t))
+
     @property
     def t_end_max_s(self) -> float:
         """Latest time [s] the front wheelset is still on the track (inf without a track; a

@@ -29,6 +29,18 @@ class CarSolver:
     #: measured on a car standing after a curve, 5.3 iterations per step with the Jacobian of the
     #: curve at speed, 1.4 with a fresh one every iteration)
     JACOBIAN_SPEED_TOL_M_PER_S = 1.0
+    #: Newton's residual cannot be brought below a floor that grows with the car's distance from
+    #: the origin: a coordinate x is only known to one unit in the last place, ulp(x) (3.6e-12 m
+    #: at 17 km), and the residual's floor was measured at 1.0-1.7e8 N/m times ulp(x) (the
+    #: shipped line's car running at 4.5, 8.5 and 17.5 km, 5 ms steps: <= 9e-5, ~1e-4 and
+    #: 1.8-6e-4 N; benchmarks/line_segments.py). Below it Newton cannot converge: with the
+    #: absolute tolerance of 1e-4 N under that floor, the car renewed its Jacobian up to 58 000
+    #: times per 25 s and took up to 18 iterations per step. So the absolute tolerance is never
+    #: set below this factor times ulp(x) at the car's furthest point [N/m]: about twice the
+    #: measured floor; below 4096 m from the origin it stays under 1e-4 N, and a car there runs
+    #: to the bit as before. 7e-4 N at 17 km is ~2e-9 of the car's weight, against ~3e-2 N that
+    #: moved the contact car's forces by 0.05 N (vehicle.car.options.CONTACT_NEWTON_REL_TOL).
+    ROUNDOFF_RESIDUAL_N_PER_M = 2.0e8
 
     def __init__(self, mbs, settings: SolverSettings, newton_rel_tol: float,
                  pre_step: Callable[..., bool], refresh_after_turn: bool):
@@ -49,6 +61,7 @@ class CarSolver:
         ti.newton.absoluteTolerance = settings.newton_abs_tol
         ti.newton.relativeTolerance = newton_rel_tol
         self._settings = s
+        self._abs_tol = settings.newton_abs_tol
         self._reuse = settings.reuse_jacobian
         self._refresh_after_turn = refresh_after_turn and self._reuse
         mbs.SetPreStepUserFunction(pre_step)
@@ -65,6 +78,7 @@ class CarSolver:
         if self._reuse:
             self.main.SetUserFunctionComputeNewtonJacobian(mbs, self._jacobian)
         self._ti = s.timeIntegration  # handles (references into the C++ objects)
+        self._newton = self.main.newton  # the solver's own copy of the Newton settings, read by every step
         self._it = self.main.it
         self._conv = self.main.conv
         self._jac_h = None  # step size of the stored Jacobian
@@ -84,12 +98,16 @@ class CarSolver:
         #: advances solved (a state's identity with :attr:`t_s`)
         self.advance_count = 0
 
-    def solve(self, t_end_s: float) -> bool:
+    def solve(self, t_end_s: float, reach_m: float = 0.0) -> bool:
         """Integrate from :attr:`t_s` to ``t_end_s`` in equal steps <= ``step_s``; :attr:`t_s`
-        is then where the integration stopped. False: it failed or a PreStep stopped it."""
+        is then where the integration stopped. False: it failed or a PreStep stopped it.
+        ``reach_m``: the furthest the car's points get from the origin in this advance [m]
+        (Newton's absolute tolerance follows its round-off, see
+        :attr:`ROUNDOFF_RESIDUAL_N_PER_M`)."""
         span = t_end_s - self.t_s
         n = max(1, math.ceil(span / self.step_s - 1e-9))
         it = self._it
+        self._newton.absoluteTolerance = max(self._abs_tol, self.ROUNDOFF_RESIDUAL_N_PER_M * math.ulp(reach_m))
         self._ti.endTime = t_end_s
         it.endTime = t_end_s
         it.maxStepSize = span / n
