@@ -5,10 +5,18 @@ iterations per step and the fresh Jacobians it took.
 
     python benchmarks/line_segments.py                 # the whole round trip, 25 s blocks
     python benchmarks/line_segments.py --until 500 --block 50
+    python benchmarks/line_segments.py --scenario my_line.yaml --origin-m 17000 --until 120
+    python benchmarks/line_segments.py --roundoff 0     # Newton's tolerance as before the rule
 
-Found with it (docs/service.md, speed): out to the terminus every 25 s costs 1-2 s; on the way
-back the kept Jacobian stops serving (thousands of fresh ones per block) and a block costs up to
-38 s.
+``--origin-m``: the line starts that far along its track (a straight before it), and the car
+with it: the same route and dynamics, far from the coordinates' origin. ``--roundoff``: the
+solver's CarSolver.ROUNDOFF_RESIDUAL_N_PER_M (0: Newton's absolute tolerance never follows the
+coordinates' round-off).
+
+Found with it (docs/service.md, speed): before the round-off rule, out to the terminus every 25 s
+cost 1-2 s and on the way back up to 38 s (thousands of fresh Jacobians per block); the line's
+first stations started 17 km out blew up the same way as soon as the car moved: Newton's
+residual stalls on a round-off floor that grows with the distance from the origin.
 """
 from __future__ import annotations
 
@@ -25,14 +33,47 @@ from bench_vehicle import K_ADIABATIC_N_PER_M
 
 from cosim.kinds import service
 from cosim.load import load_scenario
+from vehicle.car.solver import CarSolver
+
+
+def _start_line_at(origin_m: float) -> None:
+    """Every route planned from now on starts ``origin_m`` along its track (the plan's slack: a
+    straight before the first station), and every service car starts at the route's origin
+    (kinematic guidance starts the car at the track's start otherwise)."""
+    plan, make_car = service.plan, service.make_car
+
+    def shifted_plan(*args, **kwargs):
+        kwargs["slack_m"] = kwargs.get("slack_m", 0.0) + origin_m
+        return plan(*args, **kwargs)
+
+    def car_at_origin(scenario):
+        from vehicle.car import MetroCar
+        route, s = scenario.experiment.plan, scenario.experiment.payload_settings
+        payload = service.RoutePayload(route, s.floor_length_m, s.floor_width_m, s.passenger_height_m,
+                                       s.cog_above_floor_m)
+        if scenario.experiment.drive is not None:
+            return make_car(scenario)               # a wheel-driven car starts there already
+        return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
+                        spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
+                        track=route.track, speed_profile=route.speed, payload=payload, grade=route.grade,
+                        start_s_m=route.offset_m)
+
+    service.plan, service.make_car = shifted_plan, car_at_origin
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--until", type=float, help="simulated time to stop at [s] (default: the trip's end)")
     ap.add_argument("--block", type=float, default=25.0, help="simulated time per printed line [s]")
+    ap.add_argument("--scenario", type=Path, default=LINE, help="a service scenario (default: the shipped line)")
+    ap.add_argument("--origin-m", type=float, default=0.0, help="start the line this far along its track [m]")
+    ap.add_argument("--roundoff", type=float, help="CarSolver.ROUNDOFF_RESIDUAL_N_PER_M [N/m] (default: the solver's)")
     args = ap.parse_args(argv)
-    scenario = load_scenario(LINE, [], k_override=K)
+    if args.roundoff is not None:
+        CarSolver.ROUNDOFF_RESIDUAL_N_PER_M = args.roundoff
+    if args.origin_m:
+        _start_line_at(args.origin_m)
+    scenario = load_scenario(args.scenario, [], k_override=K)
     plan = scenario.experiment.plan
     horizon = args.until or service.duration_s(scenario.experiment)
     car = service.make_car(scenario)
