@@ -334,6 +334,7 @@ class MetroCar:
             self.gradient.pre_step(mbs, s_centre, hooks.centre_heading_rad)
         if self.payload is not None:
             self.payload.pre_step(mbs, self.model.carbody, t)
+            solver.carbody_mass_kg = self.payload.carbody_mass_kg
         solver.heading_rad = hooks.heading_rad
         solver.speed_m_per_s = hooks.speed_m_per_s
         return ok

@@ -57,3 +57,8 @@ class CarbodyPayload:
         mbs.SetObjectParameter(carbody, "inertia", list(now.inertia6_kg_m2))
         self._set = (blocks, now)
         self.payload_kg = payload_mass_kg(blocks)
+
+    @property
+    def carbody_mass_kg(self) -> float:
+        """The carbody's mass with the payload set last [kg]."""
+        return self._set[1].mass_kg

@@ -29,6 +29,14 @@ class CarSolver:
     #: measured on a car standing after a curve, 5.3 iterations per step with the Jacobian of the
     #: curve at speed, 1.4 with a fresh one every iteration)
     JACOBIAN_SPEED_TOL_M_PER_S = 1.0
+    #: ... and once the carbody's mass has changed by more than this fraction since (passengers
+    #: boarding or alighting: the Jacobian holds the mass matrix, M / (beta h^2) its largest
+    #: term, and modified Newton contracts by ~ the relative error of its mass per iteration:
+    #: measured on the shipped line's car standing at its first station while 60 passengers
+    #: board, 3.7-4.8 iterations per step (contractivity 0.16) with the Jacobian of t = 0, 2.2
+    #: with one renewed every 100 kg (0.5 % of that carbody), 1.6-1.7 every 10 kg at 8 times the
+    #: Jacobians; benchmarks/line_segments.py)
+    JACOBIAN_MASS_TOL = 0.005
     #: Newton's residual cannot be brought below a floor that grows with the car's distance from
     #: the origin: a coordinate x is only known to one unit in the last place, ulp(x) (3.6e-12 m
     #: at 17 km), and the residual's floor was measured at 1.0-1.7e8 N/m times ulp(x) (the
@@ -88,6 +96,9 @@ class CarSolver:
         #: the car's speed at the last step end [m/s] (set by the owner)
         self.speed_m_per_s = 0.0
         self._jac_speed = 0.0  # the car's speed when the stored Jacobian was computed [m/s]
+        #: the carbody's mass at the last step end [kg] (set by the owner; 0: it does not change)
+        self.carbody_mass_kg = 0.0
+        self._jac_mass = 0.0  # the carbody's mass when the stored Jacobian was computed [kg]
         #: the stored Jacobian may serve the coming step (the first of an advance)
         self.jacobian_may_skip = False
         self._jac_unfactorised = False  # the stored Jacobian awaits its factorisation
@@ -113,11 +124,12 @@ class CarSolver:
         it.maxStepSize = span / n
         # keep the stored Jacobian unless the car has turned (the constraint directions and
         # the rotational mass matrix follow the heading; normally renewed already at the end
-        # of the previous advance, see _refresh_jacobian) or changed its speed (terms of the
-        # Jacobian follow it)
+        # of the previous advance, see _refresh_jacobian), changed its speed (terms of the
+        # Jacobian follow it) or its carbody's mass (passengers)
         turned = abs(self.heading_rad - self._jac_heading)
         sped = abs(self.speed_m_per_s - self._jac_speed) > self.JACOBIAN_SPEED_TOL_M_PER_S
-        self.jacobian_may_skip = turned <= self.JACOBIAN_HEADING_TOL_RAD and not sped
+        massed = abs(self.carbody_mass_kg - self._jac_mass) > self.JACOBIAN_MASS_TOL * self._jac_mass
+        self.jacobian_may_skip = turned <= self.JACOBIAN_HEADING_TOL_RAD and not sped and not massed
         ok = self.main.SolveSteps(self._mbs, self._settings)
         self.t_s = float(it.currentTime)
         self.advance_count += 1
@@ -172,6 +184,7 @@ class CarSolver:
         self._jac_h = h
         self._jac_heading = self.heading_rad
         self._jac_speed = self.speed_m_per_s
+        self._jac_mass = self.carbody_mass_kg
         self._jac_unfactorised = False
         self.jacobian_count += 1
 
