@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 from exudyn.rigidBodyUtilities import InertiaCuboid, RigidBodyInertia
+from linear_bellows import newton_per_step
 
 from vehicle.car import MetroCar
 from vehicle.params import VehicleParams
@@ -124,15 +125,8 @@ def _newton_per_boarding_step(mass_tol: float, monkeypatch) -> tuple[float, int]
     def payload(t):
         return [PayloadBlock(3000.0 * min(max(t / 10.0, 0.0), 1.0), 0.0, 0.65, 14.0, 1.3, 1.7, 1.0)]
     car = MetroCar(P, payload=payload)
-    F0, k = car.static_bellow_forces_N(), np.full(4, K_BELLOW_N_PER_M)
-    it, counts, j0 = car.solver.main.it, [], car.jacobian_count
-    for n in range(1, int(round(10.0 / 0.005)) + 1):
-        z, _ = car.bellow_crushing()
-        car.set_bellow_forces(F0 + k * z, k)
-        n0 = it.newtonStepsCount
-        car.advance(n * 0.005)
-        counts.append(it.newtonStepsCount - n0)
-    return float(np.mean(counts)), car.jacobian_count - j0
+    j0 = car.jacobian_count
+    return newton_per_step(car, 10.0, K_BELLOW_N_PER_M), car.jacobian_count - j0
 
 
 def test_the_kept_jacobian_is_renewed_while_passengers_board(monkeypatch):

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from linear_bellows import newton_per_step
 
 from vehicle.car.solver import CarSolver
 from vehicle.speed import PhasedSpeedProfile
@@ -26,16 +27,8 @@ def _run(start_s_m: float, monkeypatch, roundoff_N_per_m: float | None = None):
         monkeypatch.setattr(CarSolver, "ROUNDOFF_RESIDUAL_N_PER_M", roundoff_N_per_m)
     car = MetroCar(metro_car_arb_dampers(), track=TrackGeometry((Straight(start_s_m + 100.0),)),
                    speed_profile=PROFILE, start_s_m=start_s_m)
-    F0, k = car.static_bellow_forces_N(), np.full(4, 243e3)
-    it, counts = car.solver.main.it, []
-    for n in range(1, int(round(4.0 / 0.005)) + 1):
-        z, _ = car.bellow_crushing()
-        car.set_bellow_forces(F0 + k * z, k)
-        n0 = it.newtonStepsCount
-        car.advance(n * 0.005)
-        if n * 0.005 > 1.0:
-            counts.append(it.newtonStepsCount - n0)
-    return car.wheel_loads_N(), car.bellow_crushing()[0], float(np.mean(counts))
+    iterations = newton_per_step(car, 4.0, 243e3, counted_after_s=1.0)
+    return car.wheel_loads_N(), car.bellow_crushing()[0], iterations
 
 
 def test_the_tolerance_is_the_given_one_near_the_origin_and_follows_ulp_far_from_it():

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from linear_bellows import newton_per_step
 from scipy.integrate import quad
 
 from vehicle.speed import PhasedSpeedProfile
@@ -133,16 +134,7 @@ def _newton_per_standing_step(speed_tol_m_per_s: float, monkeypatch) -> float:
     profile = PhasedSpeedProfile((0.0, 10.0, 15.0, 25.0, 29.0), (0.0, v, v, 0.0, 0.0))   # 150 m, stop at 160 m
     track = TrackGeometry((Straight(30.0), Arc(100.0, 40.0, +1), Straight(150.0)))
     car = MetroCar(metro_car_arb_dampers(), track=track, speed_profile=profile, start_s_m=10.0)
-    F0, k = car.static_bellow_forces_N(), np.full(4, 1.1e6)
-    it, counts = car.solver.main.it, []
-    for n in range(1, int(round(29.0 / 0.005)) + 1):
-        z, _ = car.bellow_crushing()
-        car.set_bellow_forces(F0 + k * z, k)
-        n0 = it.newtonStepsCount
-        car.advance(n * 0.005)
-        if n * 0.005 > 26.0:                      # standing, a second after the stop
-            counts.append(it.newtonStepsCount - n0)
-    return float(np.mean(counts))
+    return newton_per_step(car, 29.0, 1.1e6, counted_after_s=26.0)   # standing, a second after the stop
 
 
 @pytest.mark.slow
