@@ -5,9 +5,12 @@ guidance, ``metro_car_arb_dampers``, 5 ms steps.
 
     python benchmarks/wheel_drive_matrix.py                 # every row (~3 min on one core)
     python benchmarks/wheel_drive_matrix.py --only base,wet
+    python benchmarks/wheel_drive_matrix.py --jerk 1.0      # acceleration ramped at 1 m/s^3
 
 Each row: stand 1 s, accelerate to ``v`` at ``a``, cruise 4 s, brake at ``b`` to a stand, stand 3
-s; with a curve, the car brakes in its arc. Printed: the outcome (``ok``, or the wheel slide or
+s; with a curve, the car brakes in its arc. ``--jerk``: every change of acceleration ramps at it
+(the service's S-curves, cosim.runs.route.run_phases); the braking check then averages the
+last 2 s of full braking, before it ramps out. Printed: the outcome (``ok``, or the wheel slide or
 solver failure that stopped it), the largest share of adhesion a wheelset used (|Fx| / mu N), the
 car's largest offset from the profile and where it stopped against where the profile stops it,
 the braking creep forces' mean over the last 2 s of braking against M b, fresh Newton Jacobians,
@@ -20,6 +23,7 @@ import time
 
 import numpy as np
 
+from cosim.runs.route import run_phases
 from vehicle.car import MetroCar, WheelDrive
 from vehicle.errors import WheelSlide
 from vehicle.params import ContactParams, metro_car_arb_dampers
@@ -45,12 +49,27 @@ ROWS = {
 }
 
 
-def run_row(a, b, v, mu, motored, radius, cant):
-    t_acc, t_brk = v / a, v / b
-    knots = np.cumsum([0.0, 1.0, t_acc, 4.0, t_brk, 3.0])
-    profile = PhasedSpeedProfile(tuple(knots), (0.0, 0.0, v, v, 0.0, 0.0))
+def profile_of(a, b, v, jerk=None):
+    """The row's speed profile (module docstring), the time braking starts and the time the
+    full braking ends (the stop without a jerk limit, the start of the ramp-out with one)."""
+    phases = run_phases(1e9, v, a, b, jerk)              # a long run: its cruise starts and ends at v, a = 0
+    cruise = next(i for i in range(1, len(phases)) if phases[i][1:] == phases[i - 1][1:] == (v, 0.0))
+    phases[cruise] = (4.0, v, 0.0)
+    times, speeds, accels = [0.0, 1.0], [0.0, 0.0], [0.0, 0.0]
+    for duration, speed, accel in phases + [(3.0, 0.0, 0.0)]:
+        times.append(times[-1] + duration)
+        speeds.append(speed)
+        accels.append(accel)
+    profile = PhasedSpeedProfile(tuple(times), tuple(speeds), None if jerk is None else tuple(accels))
+    full = [i for i, acc in enumerate(accels) if acc == -b]
+    brake_end = times[full[-1]] if jerk is not None else times[-2]
+    return profile, times, times[cruise + 2], brake_end
+
+
+def run_row(a, b, v, mu, motored, radius, cant, jerk=None):
+    profile, knots, braking_s, brake_end_s = profile_of(a, b, v, jerk)
     stop_s = float(profile.distance(knots[-1]))
-    brake_start = float(profile.distance(knots[3]))
+    brake_start = float(profile.distance(braking_s))
     if radius is None:
         track = TrackGeometry((Straight(stop_s + 40.0),))
     else:                         # the arc from where the braking starts to beyond the stop
@@ -73,7 +92,7 @@ def run_row(a, b, v, mu, motored, radius, cant):
             car.advance(n * H)
             used = max(used, float(car.adhesion_used().max()))
             off = max(off, abs(car.hooks.torques.offset_m))
-            if knots[4] - 2.0 < n * H <= knots[4]:
+            if brake_end_s - 2.0 < n * H <= brake_end_s:
                 brake_fx.append(car.wheelset_longitudinal_forces_N().sum())
     except (WheelSlide, RuntimeError) as exc:
         outcome = f"{type(exc).__name__}: {str(exc)[:150]}"
@@ -87,13 +106,14 @@ def run_row(a, b, v, mu, motored, radius, cant):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", help="comma-separated row names")
+    ap.add_argument("--jerk", type=float, help="jerk limit [m/s^3] (default: none, the acceleration steps)")
     args = ap.parse_args()
     names = args.only.split(",") if args.only else list(ROWS)
     print("| row | outcome | adhesion used max | offset max [mm] | stop error [mm] | braking ΣFx / (M b) - 1 "
           "| Jacobians | simulated [s] | wall [s] |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for name in names:
-        r = run_row(**{**BASE, **ROWS[name]})
+        r = run_row(**{**BASE, **ROWS[name]}, jerk=args.jerk)
         print(f"| {name} | {r['outcome']} | {r['adhesion_used_max']:.3f} | {r['offset_max_mm']:.2f} | "
               f"{r['stop_error_mm']:.3f} | {r['braking_creep_vs_Mb']:.1e} | {r['jacobians']} | {r['simulated_s']:.1f} | "
               f"{r['wall_s']:.1f} |", flush=True)
