@@ -7,11 +7,12 @@ iterations per step and the fresh Jacobians it took.
     python benchmarks/line_segments.py --until 500 --block 50
     python benchmarks/line_segments.py --scenario my_line.yaml --origin-m 17000 --until 120
     python benchmarks/line_segments.py --roundoff 0     # Newton's tolerance as before the rule
+    python benchmarks/line_segments.py --roundoff 0 --vehicle primary_stiffness_x_N_per_m=1.75e6
 
 ``--origin-m``: the line starts that far along its track (a straight before it), and the car
 with it: the same route and dynamics, far from the coordinates' origin. ``--roundoff``: the
-solver's CarSolver.ROUNDOFF_RESIDUAL_N_PER_M (0: Newton's absolute tolerance never follows the
-coordinates' round-off).
+solver's CarSolver.ROUNDOFF_SAFETY (0: Newton's absolute tolerance never follows the coordinates'
+round-off). ``--vehicle NAME=VALUE``: a vehicle parameter changed (repeatable).
 
 Found with it (docs/service.md, speed): before the round-off rule, out to the terminus every 25 s
 cost 1-2 s and on the way back up to 38 s (thousands of fresh Jacobians per block); the line's
@@ -21,6 +22,7 @@ residual stalls on a round-off floor that grows with the distance from the origi
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -67,13 +69,18 @@ def main(argv=None) -> None:
     ap.add_argument("--block", type=float, default=25.0, help="simulated time per printed line [s]")
     ap.add_argument("--scenario", type=Path, default=LINE, help="a service scenario (default: the shipped line)")
     ap.add_argument("--origin-m", type=float, default=0.0, help="start the line this far along its track [m]")
-    ap.add_argument("--roundoff", type=float, help="CarSolver.ROUNDOFF_RESIDUAL_N_PER_M [N/m] (default: the solver's)")
+    ap.add_argument("--roundoff", type=float, help="CarSolver.ROUNDOFF_SAFETY (default: the solver's; 0: no rule)")
+    ap.add_argument("--vehicle", action="append", default=[], metavar="NAME=VALUE",
+                    help="change a vehicle parameter (vehicle.params.VehicleParams field), repeatable")
     args = ap.parse_args(argv)
     if args.roundoff is not None:
-        CarSolver.ROUNDOFF_RESIDUAL_N_PER_M = args.roundoff
+        CarSolver.ROUNDOFF_SAFETY = args.roundoff
     if args.origin_m:
         _start_line_at(args.origin_m)
     scenario = load_scenario(args.scenario, [], k_override=K)
+    if args.vehicle:
+        changes = {name: float(value) for name, value in (item.split("=", 1) for item in args.vehicle)}
+        scenario = dataclasses.replace(scenario, vehicle=dataclasses.replace(scenario.vehicle, **changes))
     plan = scenario.experiment.plan
     horizon = args.until or service.duration_s(scenario.experiment)
     car = service.make_car(scenario)

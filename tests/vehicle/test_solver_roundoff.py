@@ -1,5 +1,5 @@
 """Newton's absolute tolerance follows the round-off of the car's coordinates far from the origin
-(vehicle/car/solver.py, CarSolver.ROUNDOFF_RESIDUAL_N_PER_M)."""
+(vehicle/car/solver.py, CarSolver.ROUNDOFF_SAFETY)."""
 from __future__ import annotations
 
 import math
@@ -16,15 +16,15 @@ FAR_M = 17000.0
 PROFILE = PhasedSpeedProfile((0.0, 2.0, 4.0), (0.0, 10.0, 10.0))   # moving: standing, the floor does not show
 
 
-def _run(start_s_m: float, monkeypatch, roundoff_N_per_m: float | None = None):
+def _run(start_s_m: float, monkeypatch, roundoff_safety: float | None = None):
     """The same kinematic car, started ``start_s_m`` along a straight, 4 s at PROFILE: its wheel
     loads and carbody height at the end, and Newton's iterations per step while moving."""
     from vehicle.car import MetroCar
     from vehicle.params import metro_car_arb_dampers
     from vehicle.track import Straight, TrackGeometry
 
-    if roundoff_N_per_m is not None:
-        monkeypatch.setattr(CarSolver, "ROUNDOFF_RESIDUAL_N_PER_M", roundoff_N_per_m)
+    if roundoff_safety is not None:
+        monkeypatch.setattr(CarSolver, "ROUNDOFF_SAFETY", roundoff_safety)
     car = MetroCar(metro_car_arb_dampers(), track=TrackGeometry((Straight(start_s_m + 100.0),)),
                    speed_profile=PROFILE, start_s_m=start_s_m)
     iterations = newton_per_step(car, 4.0, 243e3, counted_after_s=1.0)
@@ -32,10 +32,20 @@ def _run(start_s_m: float, monkeypatch, roundoff_N_per_m: float | None = None):
 
 
 def test_the_tolerance_is_the_given_one_near_the_origin_and_follows_ulp_far_from_it():
-    # below 4096 m, 2e8 N/m x ulp(x) <= 2e8 x 4.5e-13 = 9.1e-5 N < 1e-4 N: the given tolerance,
-    # so every car that stays there runs to the bit as before the rule
-    assert CarSolver.ROUNDOFF_RESIDUAL_N_PER_M * math.ulp(4095.0) < 1e-4
-    assert CarSolver.ROUNDOFF_RESIDUAL_N_PER_M * math.ulp(FAR_M) == pytest.approx(7.276e-4, rel=1e-3)
+    from vehicle.car import MetroCar
+    from vehicle.params import manchester_vehicle_1, metro_car_arb_dampers
+
+    car = MetroCar(metro_car_arb_dampers())
+    stiffness = 8 * metro_car_arb_dampers().primary_stiffness_x_N_per_m   # two axlebox springs a wheelset
+    assert car.solver._roundoff_N_per_m == stiffness
+    # the metro car (17.5 MN/m a spring) below 4096 m and the stiffest shipped car (Manchester,
+    # 31.4 MN/m) below 2048 m: under 1e-4 N, the given tolerance, to the bit as before the rule
+    assert CarSolver.ROUNDOFF_SAFETY * stiffness * math.ulp(4095.0) < 1e-4
+    assert CarSolver.ROUNDOFF_SAFETY * 8 * manchester_vehicle_1().primary_stiffness_x_N_per_m * math.ulp(2047.0) < 1e-4
+    # at 17 km: 1.5 x 1.4e8 N/m x 3.64e-12 m
+    assert CarSolver.ROUNDOFF_SAFETY * stiffness * math.ulp(FAR_M) == pytest.approx(7.64e-4, rel=1e-3)
+    car.advance(0.005)
+    assert car.solver._newton.absoluteTolerance == car.solver._abs_tol
 
 
 @pytest.mark.slow
@@ -49,10 +59,10 @@ def test_a_car_far_from_the_origin_runs_as_one_near_it(monkeypatch):
     and 2.5e-5 m (the steps that did not converge were taken all the same)."""
     near_Q, near_z, near_it = _run(10.0, monkeypatch)
     far_Q, far_z, far_it = _run(FAR_M, monkeypatch)
-    # Newton's residual <= 7.3e-4 N against the car's stiffnesses (>= 2.4e5 N/m): displacements
+    # Newton's residual <= 7.6e-4 N against the car's stiffnesses (>= 2.4e5 N/m): displacements
     # within ~3e-9 m, forces within ~7e-4 N per step; 1e-3 N and 1e-9 m are those bounds
     np.testing.assert_allclose(far_Q, near_Q, rtol=0, atol=1e-3)
     np.testing.assert_allclose(far_z, near_z, rtol=0, atol=1e-9)
     assert far_it < 1.3 * near_it, (near_it, far_it)
-    _, _, stalled_it = _run(FAR_M, monkeypatch, roundoff_N_per_m=0.0)
+    _, _, stalled_it = _run(FAR_M, monkeypatch, roundoff_safety=0.0)
     assert stalled_it > 2.0 * near_it, (near_it, stalled_it)

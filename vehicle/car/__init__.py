@@ -100,8 +100,8 @@ kept across macro-steps while the step size is unchanged and the track heading h
 less than :attr:`MetroCar.JACOBIAN_HEADING_TOL_RAD` (the bellow stiffness is ~1e-4 of the
 effective mass stiffness M/(beta h^2)); a fresh one is computed with a second solver on the same
 system when the heading has turned or Newton asks for it. Newton's absolute tolerance follows the
-round-off of the coordinates beyond 4096 m from the origin, where the residual cannot be brought
-below ~1e8 N/m x ulp(x) (:attr:`.solver.CarSolver.ROUNDOFF_RESIDUAL_N_PER_M`).
+round-off of the coordinates far from the origin, where the residual cannot be brought below the
+axlebox springs' longitudinal stiffness times ulp(x) (:attr:`.solver.CarSolver.ROUNDOFF_SAFETY`).
 
 Known limits of kinematic guidance (contact guidance has none of them):
 

@@ -98,7 +98,7 @@ class MetroCar:
             wheelset-on-contact modes; :data:`SPECTRAL_RADIUS`).
         newton_abs_tol: Newton absolute tolerance on the residual (force scale [N]); never
             below the round-off of the coordinates far from the origin (beyond 4096 m, see
-            :attr:`.solver.CarSolver.ROUNDOFF_RESIDUAL_N_PER_M`).
+            :attr:`.solver.CarSolver.ROUNDOFF_SAFETY`).
         newton_rel_tol: Newton tolerance relative to the initial residual of the step; None:
             1e-8 with kinematic guidance, :attr:`CONTACT_NEWTON_REL_TOL` with contact guidance.
         reuse_jacobian: reuse the Newton Jacobian across :meth:`advance` calls (see module doc).
@@ -197,7 +197,10 @@ class MetroCar:
                                 self.payload_kg)
         #: the solver (:class:`~.solver.CarSolver`)
         self.solver = CarSolver(self.mbs, options.solver, options.solver.relative_tolerance(model.contact_guidance),
-                                self._pre_step, refresh_after_turn=model.contact_guidance)
+                                self._pre_step, refresh_after_turn=model.contact_guidance,
+                                # two axlebox springs on each of the four wheelsets: their longitudinal
+                                # stiffness sets the residual's round-off floor far from the origin
+                                roundoff_stiffness_N_per_m=8.0 * params.primary_stiffness_x_N_per_m)
         if self.maxwell.active:
             self.mbs.SetPostStepUserFunction(self.maxwell.post_step)
         #: the line's gradient (:class:`~.gradient.Gradient`; None: level)

@@ -39,19 +39,25 @@ class CarSolver:
     JACOBIAN_MASS_TOL = 0.005
     #: Newton's residual cannot be brought below a floor that grows with the car's distance from
     #: the origin: a coordinate x is only known to one unit in the last place, ulp(x) (3.6e-12 m
-    #: at 17 km), and the residual's floor was measured at 1.0-1.7e8 N/m times ulp(x) (the
-    #: shipped line's car running at 4.5, 8.5 and 17.5 km, 5 ms steps: <= 9e-5, ~1e-4 and
-    #: 1.8-6e-4 N; benchmarks/line_segments.py). Below it Newton cannot converge: with the
-    #: absolute tolerance of 1e-4 N under that floor, the car renewed its Jacobian up to 58 000
-    #: times per 25 s and took up to 18 iterations per step. So the absolute tolerance is never
-    #: set below this factor times ulp(x) at the car's furthest point [N/m]: about twice the
-    #: measured floor; below 4096 m from the origin it stays under 1e-4 N, and a car there runs
-    #: to the bit as before. 7e-4 N at 17 km is ~2e-9 of the car's weight, against ~3e-2 N that
-    #: moved the contact car's forces by 0.05 N (vehicle.car.options.CONTACT_NEWTON_REL_TOL).
-    ROUNDOFF_RESIDUAL_N_PER_M = 2.0e8
+    #: at 17 km), and a stiff spring whose elongation is a difference of two such coordinates
+    #: turns that into force. Measured on the shipped line's car running (5 ms steps,
+    #: benchmarks/line_segments.py): <= 9e-5, ~1e-4 and 1.8-6e-4 N at 4.5, 8.5 and 17.5 km,
+    #: ~1.0-1.7e8 N/m x ulp(x), the axlebox springs' longitudinal stiffness summed (8 x 17.5 MN/m
+    #: = 1.4e8 N/m): at 17 km their stiffness x 0.1 took the stalled car from 12.7 to 2.3
+    #: iterations per step, x 0.5 to 2.7, the lateral and vertical ones x 0.1 changed nothing.
+    #: Below that floor Newton cannot converge: with the absolute tolerance of 1e-4 N under it,
+    #: the line's car renewed its Jacobian up to 58 000 times per 25 s. So the absolute tolerance
+    #: is never set below this factor times that stiffness (``roundoff_stiffness_N_per_m``) times
+    #: ulp(x) at the car's furthest wheelset. It stays under 1e-4 N below 4096 m for axleboxes up
+    #: to 18 MN/m longitudinally (the metro cars, 17.5 MN/m), below 2048 m up to 36 MN/m (every
+    #: shipped car), and a car there runs to the bit as before. 7.6e-4 N at 17 km for the metro
+    #: car is ~2e-9 of its weight, against ~3e-2 N that moved the contact car's forces by 0.05 N
+    #: (vehicle.car.options.CONTACT_NEWTON_REL_TOL).
+    ROUNDOFF_SAFETY = 1.5
 
     def __init__(self, mbs, settings: SolverSettings, newton_rel_tol: float,
-                 pre_step: Callable[..., bool], refresh_after_turn: bool):
+                 pre_step: Callable[..., bool], refresh_after_turn: bool,
+                 roundoff_stiffness_N_per_m: float = 0.0):
         self._mbs = mbs
         self.step_s = settings.step_s
         s = exu.SimulationSettings()
@@ -70,6 +76,7 @@ class CarSolver:
         ti.newton.relativeTolerance = newton_rel_tol
         self._settings = s
         self._abs_tol = settings.newton_abs_tol
+        self._roundoff_N_per_m = float(roundoff_stiffness_N_per_m)
         self._reuse = settings.reuse_jacobian
         self._refresh_after_turn = refresh_after_turn and self._reuse
         mbs.SetPreStepUserFunction(pre_step)
@@ -113,12 +120,12 @@ class CarSolver:
         """Integrate from :attr:`t_s` to ``t_end_s`` in equal steps <= ``step_s``; :attr:`t_s`
         is then where the integration stopped. False: it failed or a PreStep stopped it.
         ``reach_m``: the furthest the car's points get from the origin in this advance [m]
-        (Newton's absolute tolerance follows its round-off, see
-        :attr:`ROUNDOFF_RESIDUAL_N_PER_M`)."""
+        (Newton's absolute tolerance follows its round-off, see :attr:`ROUNDOFF_SAFETY`)."""
         span = t_end_s - self.t_s
         n = max(1, math.ceil(span / self.step_s - 1e-9))
         it = self._it
-        self._newton.absoluteTolerance = max(self._abs_tol, self.ROUNDOFF_RESIDUAL_N_PER_M * math.ulp(reach_m))
+        floor = self.ROUNDOFF_SAFETY * self._roundoff_N_per_m * math.ulp(reach_m)
+        self._newton.absoluteTolerance = max(self._abs_tol, floor)
         self._ti.endTime = t_end_s
         it.endTime = t_end_s
         it.maxStepSize = span / n
