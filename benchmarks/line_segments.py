@@ -40,27 +40,14 @@ from vehicle.car.solver import CarSolver
 
 def _start_line_at(origin_m: float) -> None:
     """Every route planned from now on starts ``origin_m`` along its track (the plan's slack: a
-    straight before the first station), and every service car starts at the route's origin
-    (kinematic guidance starts the car at the track's start otherwise)."""
-    plan, make_car = service.plan, service.make_car
+    straight before the first station); the service's car starts at the route's origin."""
+    plan = service.plan
 
     def shifted_plan(*args, **kwargs):
         kwargs["slack_m"] = kwargs.get("slack_m", 0.0) + origin_m
         return plan(*args, **kwargs)
 
-    def car_at_origin(scenario):
-        from vehicle.car import MetroCar
-        route, s = scenario.experiment.plan, scenario.experiment.payload_settings
-        payload = service.RoutePayload(route, s.floor_length_m, s.floor_width_m, s.passenger_height_m,
-                                       s.cog_above_floor_m)
-        if scenario.experiment.drive is not None:
-            return make_car(scenario)               # a wheel-driven car starts there already
-        return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
-                        spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
-                        track=route.track, speed_profile=route.speed, payload=payload, grade=route.grade,
-                        start_s_m=route.offset_m)
-
-    service.plan, service.make_car = shifted_plan, car_at_origin
+    service.plan = shifted_plan
 
 
 def main(argv=None) -> None:

@@ -146,7 +146,7 @@ class PhasedSpeedProfile:
         return min(max(bisect.bisect_right(self._t_list, t) - 1, 0), len(self._t_list) - 2)
 
     def _polynomial(self, i: int, u: float):
-        """(s, v, a) at ``u`` into phase i (u in [0, t_i+1 - t_i])."""
+        """(s, v, a) at ``u`` into phase i (u in [0, t_i+1 - t_i]; i and u may be arrays)."""
         a0 = self._a0[i]
         if self.accelerations_m_per_s2 is None:
             return self._s[i] + self._v[i] * u + 0.5 * a0 * u * u, self._v[i] + a0 * u, a0
@@ -167,9 +167,7 @@ class PhasedSpeedProfile:
             return np.interp(t_s, self._t, self._v)
         t = np.clip(np.asarray(t_s, float), self._t[0], self._t[-1])
         i = np.clip(np.searchsorted(self._t, t, side="right") - 1, 0, len(self._t) - 2)
-        u = t - self._t[i]
-        jerk = (self._a1[i] - self._a0[i]) / (self._t[i + 1] - self._t[i])
-        v = self._v[i] + u * (self._a0[i] + 0.5 * jerk * u)
+        v = self._polynomial(i, t - self._t[i])[1]
         return float(v) if np.ndim(t_s) == 0 else v
 
     def _distance(self, t: float) -> float:

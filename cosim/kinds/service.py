@@ -416,10 +416,11 @@ def make_car(scenario: Scenario):
     route, s = service.plan, service.payload_settings
     payload = RoutePayload(route, s.floor_length_m, s.floor_width_m, s.passenger_height_m, s.cog_above_floor_m)
     drive = {} if service.drive is None else dict(guidance="contact", drive=service.drive.wheel_drive(),
-                                                    contact=service.drive.contact_params(), start_s_m=route.offset_m)
+                                                    contact=service.drive.contact_params())
     return MetroCar(scenario.vehicle, step_s=scenario.solver.mechanics_step_s,
                     spectral_radius=scenario.solver.spectral_radius, track_structure=scenario.track,
-                    track=route.track, speed_profile=route.speed, payload=payload, grade=route.grade, **drive)
+                    track=route.track, speed_profile=route.speed, payload=payload, grade=route.grade,
+                    start_s_m=route.offset_m, **drive)
 
 
 def air_per_stop_kg(sample) -> np.ndarray:

@@ -97,8 +97,8 @@ class MetroCar:
             (numerical damping of what the step cannot resolve, e.g. the ~240 Hz
             wheelset-on-contact modes; :data:`SPECTRAL_RADIUS`).
         newton_abs_tol: Newton absolute tolerance on the residual (force scale [N]); never
-            below the round-off of the coordinates far from the origin (beyond 4096 m, see
-            :attr:`.solver.CarSolver.ROUNDOFF_SAFETY`).
+            below the round-off of the coordinates far from the origin (for the metro cars
+            beyond 4096 m, see :attr:`.solver.CarSolver.ROUNDOFF_SAFETY`).
         newton_rel_tol: Newton tolerance relative to the initial residual of the step; None:
             1e-8 with kinematic guidance, :attr:`CONTACT_NEWTON_REL_TOL` with contact guidance.
         reuse_jacobian: reuse the Newton Jacobian across :meth:`advance` calls (see module doc).

@@ -2,6 +2,7 @@
 distance run, the tabulated track (:class:`CarPath`)."""
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -85,7 +86,12 @@ class CarPath:
         (the track starts at the origin; a car without one runs along x): the largest of
         their arc lengths' magnitudes, plus the distance run (a profile's distance is monotonic,
         so the bound holds over the whole advance to t)."""
-        return float(np.max(np.abs(self.wheelset_s0_m))) + abs(self.distance_m(t))
+        return self._s0_reach_m + abs(self.distance_m(t))
+
+    @functools.cached_property
+    def _s0_reach_m(self) -> float:
+        """The largest of the wheelsets' arc lengths' magnitudes at t = 0 [m]."""
+        return float(np.max(np.abs(self.wheelset_s0_m)))
 
     @property
     def t_end_max_s(self) -> float:
